@@ -1,0 +1,40 @@
+"""Save what the window shows after some steps, without a screen (for docs and for looking).
+
+python scripts/screenshot.py shapes/horseshoe.png --steps 1600 --out docs/horseshoe.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+
+import pygame
+
+from swarmshape.cli import build_parser, prepare
+from swarmshape.viewer import Viewer
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("path", type=Path)
+    parser.add_argument("--steps", type=int, default=1000)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--size", type=int, nargs=2, default=(1280, 800))
+    args = parser.parse_args()
+    run = prepare(build_parser().parse_args(["run", str(args.path), "--seed", str(args.seed)]))
+    viewer = Viewer(run.new_swarm, title=run.scenario.name, size=tuple(args.size), speed=1, fps=0)
+    while viewer.swarm.step_count < args.steps:
+        viewer.swarm.step()
+    viewer.paused = True
+    viewer.tick()
+    pygame.image.save(viewer.screen, args.out)
+    print(f"{args.out}: step {viewer.swarm.step_count}")
+
+
+if __name__ == "__main__":
+    main()

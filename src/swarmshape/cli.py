@@ -1,0 +1,205 @@
+"""Command line: ``swarmshape [run] [PATH] [options]`` and ``swarmshape strategies``.
+
+Bad input of any kind ends in one line on stderr and exit code 2; the viewer and pygame are
+only imported when a window is wanted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from importlib import metadata, resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from swarmshape import strategies
+from swarmshape.bitmap import DEFAULT_CELLS, DEFAULT_THRESHOLD
+from swarmshape.errors import InputError
+from swarmshape.files import write_text
+from swarmshape.fill_order import ORDERS
+from swarmshape.metrics import run_metrics, summary_line
+from swarmshape.motion import Limits
+from swarmshape.scenario import ImageOptions, Scenario, load_scenario
+from swarmshape.swarm import Params, Swarm
+from swarmshape.world import build_world
+
+DEFAULT_SHAPE = "horseshoe.png"
+DEFAULT_MAX_STEPS = 500_000
+COMMANDS = ("run", "strategies")
+
+
+def bundled_shapes() -> Path:
+    """The shipped shapes: inside an installed wheel, or the source checkout's shapes/."""
+    installed = resources.files("swarmshape") / "shapes"
+    if installed.is_dir():
+        return Path(str(installed))
+    return Path(__file__).resolve().parents[2] / "shapes"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="swarmshape",
+        description="Watch a swarm of square robots organise itself into a shape.",
+        epilog="Commands: run (the default) and strategies. See 'swarmshape run --help'.",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    commands = parser.add_subparsers(dest="command")
+    run = commands.add_parser(
+        "run",
+        help="form a shape (the default command)",
+        description="Form the shape of an image or a .toml scenario, in a window or headless.",
+    )
+    run.add_argument(
+        "path",
+        nargs="?",
+        type=Path,
+        help=f"an image (PNG, GIF, BMP, JPEG, WebP) or a .toml scenario "
+        f"(default: the bundled {DEFAULT_SHAPE})",
+    )
+    run.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
+    run.add_argument("--agents", type=int, help="number of agents (default: one per cell)")
+    run.add_argument("--strategy", help="target assignment strategy (see 'swarmshape strategies')")
+    run.add_argument("--order", choices=ORDERS, help="fill order of the paper's target function")
+    image = run.add_argument_group("image loading")
+    image.add_argument(
+        "--cells",
+        type=int,
+        default=DEFAULT_CELLS,
+        help=f"longest side of the shape in cells; larger images shrink (default {DEFAULT_CELLS})",
+    )
+    image.add_argument(
+        "--threshold",
+        type=float,
+        default=DEFAULT_THRESHOLD,
+        help=f"luminance 0..1 between ink and background (default {DEFAULT_THRESHOLD})",
+    )
+    image.add_argument("--invert", action="store_true", help="the ink is the light part")
+    sim = run.add_argument_group("simulation")
+    sim.add_argument("--arena", type=_size, help="arena size in cells as WxH (default: automatic)")
+    sim.add_argument("--max-speed", type=float, help="cells per step (default 0.5)")
+    sim.add_argument("--max-accel", type=float, help="cells per step squared (default 0.125)")
+    sim.add_argument(
+        "--max-steps", type=int, help=f"stop after this many steps (default {DEFAULT_MAX_STEPS})"
+    )
+    out = run.add_argument_group("output")
+    out.add_argument("--headless", action="store_true", help="no window: run, print a summary")
+    out.add_argument("--metrics", type=Path, help="write the run's metrics as JSON to this file")
+    out.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
+    commands.add_parser("strategies", help="list the available strategies")
+    return parser
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        width, height = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected WIDTHxHEIGHT, e.g. 60x40, got {text!r}"
+        ) from None
+    return width, height
+
+
+def _version() -> str:
+    try:
+        return metadata.version("swarmshape")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
+        argv.insert(0, "run")
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command == "strategies":
+            return list_strategies()
+        return run(args)
+    except InputError as error:
+        print(f"swarmshape: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+def list_strategies() -> int:
+    width = max(len(name) for name in strategies.REGISTRY)
+    for name, cls in sorted(strategies.REGISTRY.items()):
+        print(f"{name:<{width}}  {cls.description}")
+    return 0
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A run ready to start: its scenario, final settings, and a way to build its swarm."""
+
+    scenario: Scenario
+    settings: dict[str, Any]
+    new_swarm: Callable[[], Swarm]
+
+
+def prepare(args: argparse.Namespace) -> Prepared:
+    """Load the scenario, merge the options into it, and build the world once."""
+    path = args.path or bundled_shapes() / DEFAULT_SHAPE
+    scenario = load_scenario(path, ImageOptions(args.cells, args.threshold, args.invert))
+    settings = _settings(scenario, args)
+    specs = list(scenario.groups)
+    if args.agents is not None:
+        if len(specs) > 1:
+            raise InputError("--agents applies to one shape; set agents per group in the scenario")
+        specs[0] = replace(specs[0], agents=args.agents)
+    world = build_world(specs, args.arena or scenario.arena)
+    strategy_class = strategies.get(settings["strategy"])
+    params = Params(limits=Limits(settings["max_speed"], settings["max_accel"]))
+
+    def new_swarm() -> Swarm:
+        return Swarm(world, strategy_class(order=settings["order"]), settings["seed"], params)
+
+    return Prepared(scenario, settings, new_swarm)
+
+
+def run(args: argparse.Namespace) -> int:
+    prepared = prepare(args)
+    settings = prepared.settings
+    if not args.headless:
+        from swarmshape.viewer import Viewer  # pygame only when a window is wanted
+
+        print(f"seed {settings['seed']}")
+        Viewer(prepared.new_swarm, title=prepared.scenario.name, speed=args.speed).run()
+        return 0
+    swarm = prepared.new_swarm()
+    swarm.run(settings["max_steps"])
+    metrics = run_metrics(swarm, prepared.scenario.name, settings["strategy"])
+    print(summary_line(metrics))
+    if args.metrics:
+        write_text(args.metrics, json.dumps(metrics, indent=2) + "\n")
+    return 0
+
+
+def _settings(scenario: Scenario, args: argparse.Namespace) -> dict[str, Any]:
+    """Command-line options win over the scenario's values, which win over defaults."""
+    defaults = {
+        "strategy": "paper",
+        "order": "outward",
+        "seed": None,
+        "max_steps": DEFAULT_MAX_STEPS,
+        "max_speed": Limits.max_speed,
+        "max_accel": Limits.max_accel,
+    }
+    chosen = {**defaults, **scenario.settings}
+    for key in defaults:
+        value = getattr(args, key)
+        if value is not None:
+            chosen[key] = value
+    if chosen["seed"] is None:
+        chosen["seed"] = int(np.random.SeedSequence().generate_state(1)[0])
+    if chosen["order"] not in ORDERS:
+        raise InputError(f"unknown order {chosen['order']!r}; choose one of {', '.join(ORDERS)}")
+    if chosen["max_steps"] < 0:
+        raise InputError(f"--max-steps must be 0 or more, got {chosen['max_steps']}")
+    return chosen

@@ -1,0 +1,83 @@
+"""Which way a moving agent should step next to reach its target.
+
+`FieldPlanner` is the paper's navigator for few movers: a breadth-first distance field from the
+target over the cells not blocked by resting agents or seeds, followed downhill. Fields are
+cached per agent and recomputed when the agent is told its view is stale (it got blocked).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from swarmshape.motion import STEPS, inside
+
+STRAIGHT_BONUS = 0.2
+LONG_AXIS_BONUS = 0.1
+"""Tie-breaks among equally short steps: keep going straight (no stop to turn), else close the
+longer remaining axis first, so paths are L-shaped rather than staircases."""
+
+
+class FieldPlanner:
+    """Breadth-first distance fields over the arena, one per moving agent."""
+
+    def __init__(self, size: tuple[int, int]) -> None:
+        self.size = size
+        width, height = size
+        ids = np.arange(width * height).reshape(size)
+        self._edges = np.concatenate(
+            [
+                np.column_stack([ids[:-1].ravel(), ids[1:].ravel()]),
+                np.column_stack([ids[:, :-1].ravel(), ids[:, 1:].ravel()]),
+            ]
+        )
+        self._fields: dict[int, np.ndarray] = {}
+
+    def field(self, goal: np.ndarray, passable: np.ndarray) -> np.ndarray:
+        """Steps from every cell to `goal` moving through `passable` cells (inf if cut off)."""
+        flat = passable.ravel()
+        keep = flat[self._edges[:, 0]] & flat[self._edges[:, 1]]
+        a, b = self._edges[keep].T
+        n = flat.size
+        graph = sparse.csr_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+        start = goal[0] * self.size[1] + goal[1]
+        return csgraph.shortest_path(graph, directed=False, unweighted=True, indices=start)
+
+    def plan(self, agent: int, cell: np.ndarray, goal: np.ndarray, views: list[np.ndarray]) -> None:
+        """Cache a field for `agent`: the first passable view in which `goal` is reachable."""
+        for passable in views:
+            distance = self.field(goal, passable)
+            self._fields[agent] = distance
+            if np.isfinite(distance[cell[0] * self.size[1] + cell[1]]):
+                return
+
+    def has_plan(self, agent: int) -> bool:
+        return agent in self._fields
+
+    def forget(self, agents: np.ndarray) -> None:
+        for agent in np.asarray(agents).tolist():
+            self._fields.pop(agent, None)
+
+    def directions(
+        self, agents: np.ndarray, cells: np.ndarray, goals: np.ndarray, current: np.ndarray
+    ) -> np.ndarray:
+        """Direction index (0 = none) of the best downhill step from each agent's `cells`."""
+        if len(agents) == 0:
+            return np.zeros(0, dtype=np.int64)
+        fields = np.stack([self._fields[a] for a in agents.tolist()])
+        neighbours = cells[:, None, :] + STEPS[None, 1:, :]
+        valid = inside(neighbours.reshape(-1, 2), self.size).reshape(-1, 4)
+        flat = np.where(valid, neighbours[..., 0] * self.size[1] + neighbours[..., 1], 0)
+        rows = np.arange(len(agents))[:, None]
+        downhill = np.where(valid, fields[rows, flat], np.inf)
+        here = fields[np.arange(len(agents)), cells[:, 0] * self.size[1] + cells[:, 1]]
+        remaining = np.abs(goals - cells)
+        long_axis = np.where(remaining[:, 0] >= remaining[:, 1], 0, 1)
+        axis_of = np.array([0, 0, 1, 1])
+        score = downhill.copy()
+        score -= STRAIGHT_BONUS * (np.arange(1, 5)[None, :] == current[:, None])
+        score -= LONG_AXIS_BONUS * (axis_of[None, :] == long_axis[:, None])
+        best = np.argmin(score, axis=1)
+        improves = downhill[np.arange(len(agents)), best] < here
+        return np.where(improves, best + 1, 0)

@@ -1,0 +1,57 @@
+"""The paper's strategy: one robot of each group moves at a time, passing the baton by message.
+
+The seeds send the first "go to target T" message to a random waiting robot. Whenever a robot
+settles it sends the next target of the fill order to another waiting robot, chosen at random.
+When a group's targets run out, its remaining robots wander.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+from swarmshape.fill_order import fill_sequence
+from swarmshape.messages import SEEDS
+from swarmshape.strategies import register
+
+if TYPE_CHECKING:
+    from swarmshape.swarm import Swarm
+
+
+@register
+class Paper:
+    name: ClassVar[str] = "paper"
+    description: ClassVar[str] = "one mover per group at a time, targets handed on by message"
+
+    def __init__(self, order: str = "outward") -> None:
+        self.order = order
+        self._sequence: list[np.ndarray] = []
+        self._next: list[int] = []
+
+    def start(self, swarm: Swarm) -> None:
+        world = swarm.world
+        first = np.cumsum([0] + [len(g.targets) for g in world.groups])
+        self._sequence = [
+            first[g] + fill_sequence(world, g, self.order, swarm.rng)
+            for g in range(len(world.groups))
+        ]
+        self._next = [0] * len(world.groups)
+        for g in range(len(world.groups)):
+            self._hand_on(swarm, g, SEEDS)
+
+    def on_settled(self, swarm: Swarm, agents: np.ndarray) -> None:
+        for agent in agents.tolist():
+            self._hand_on(swarm, int(swarm.group[agent]), agent)
+
+    def _hand_on(self, swarm: Swarm, group: int, sender: int) -> None:
+        """Send the group's next target to a random waiting robot, or let the rest wander."""
+        waiting = swarm.waiting(group)
+        if self._next[group] == len(self._sequence[group]):
+            swarm.release(waiting)
+            return
+        if len(waiting) == 0:
+            return
+        recipient = int(swarm.rng.choice(waiting))
+        swarm.send(sender, recipient, int(self._sequence[group][self._next[group]]))
+        self._next[group] += 1

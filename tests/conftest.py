@@ -1,0 +1,37 @@
+"""Shared fixtures. Tests never need a screen: SDL uses its dummy drivers."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swarmshape.shape import Shape
+from swarmshape.strategies import get
+from swarmshape.swarm import Swarm
+from swarmshape.world import GroupSpec, build_world
+
+SHAPES = Path(__file__).resolve().parent.parent / "shapes"
+
+
+@pytest.fixture
+def shapes() -> Path:
+    return SHAPES
+
+
+def grid_from(text: str) -> np.ndarray:
+    """A grid from rows of '#' (ink) and '.' (empty)."""
+    return np.array([[c == "#" for c in row] for row in text.split()], dtype=bool)
+
+
+def make_swarm(
+    grid: np.ndarray, *, agents: int | None = None, seed: int = 0, order: str = "outward"
+) -> Swarm:
+    world = build_world([GroupSpec("test", Shape(grid), (200, 60, 60), agents)])
+    return Swarm(world, get("paper")(order=order), seed)

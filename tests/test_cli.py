@@ -1,0 +1,109 @@
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from swarmshape.cli import main
+from tests.conftest import SHAPES
+
+METRIC_KEYS = {
+    "shape", "strategy", "seed", "agents", "targets", "scale", "steps", "coverage", "iou",
+    "total_distance", "overlaps", "groups",
+}  # fmt: skip
+
+
+def swarmshape(*args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
+    return subprocess.run(
+        [sys.executable, "-m", "swarmshape", *args], capture_output=True, text=True, env=env
+    )
+
+
+def test_headless_run_prints_a_summary_and_writes_metrics(tmp_path, capsys):
+    out = tmp_path / "m.json"
+    code = main([str(SHAPES / "line.png"), "--headless", "--seed", "4", "--metrics", str(out)])
+    assert code == 0
+    assert "line.png: paper, 16 agents" in capsys.readouterr().out
+    metrics = json.loads(out.read_text())
+    assert set(metrics) >= METRIC_KEYS
+    assert metrics["coverage"] == 1.0 and metrics["overlaps"] == 0 and metrics["seed"] == 4
+    assert metrics["groups"][0]["steps"] == metrics["steps"] > 0
+
+
+def test_same_seed_gives_the_same_metrics_file_byte_for_byte(tmp_path):
+    files = []
+    for name in ("a.json", "b.json"):
+        path = tmp_path / name
+        args = ["run", str(SHAPES / "two-squares.toml"), "--headless", "--seed", "21"]
+        assert swarmshape(*args, "--metrics", str(path)).returncode == 0
+        files.append(path.read_bytes())
+    assert files[0] == files[1]
+
+
+def test_options_override_the_scenario(tmp_path):
+    out = tmp_path / "m.json"
+    args = [str(SHAPES / "square.png"), "--headless", "--agents", "20", "--order", "random"]
+    assert main([*args, "--seed", "1", "--metrics", str(out)]) == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["agents"] == 20 and metrics["targets"] <= 20 and metrics["scale"] < 1
+
+
+def test_max_steps_stops_an_unfinished_run(tmp_path):
+    out = tmp_path / "m.json"
+    args = [str(SHAPES / "square.png"), "--headless", "--max-steps", "10", "--metrics", str(out)]
+    assert main(args) == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["steps"] is None and metrics["steps_run"] == 10 and metrics["coverage"] < 1
+
+
+def test_version_and_help_and_strategies():
+    assert swarmshape("--version").stdout.startswith("swarmshape ")
+    help_text = swarmshape("run", "--help").stdout
+    for option in ("--seed", "--agents", "--cells", "--threshold", "--invert", "--headless",
+                   "--metrics", "--max-steps", "--order", "--strategy"):  # fmt: skip
+        assert option in help_text
+    assert "paper" in swarmshape("strategies").stdout
+
+
+def bad_inputs(tmp_path):
+    (tmp_path / "text.png").write_text("not an image")
+    (tmp_path / "white.png").write_bytes((SHAPES / "line.png").read_bytes())
+    (tmp_path / "bad.toml").write_text("groups = [ {shape = 'x.png'")
+    (tmp_path / "typo.toml").write_text("[[groups]]\nshap = 'line.png'\n")
+    return {
+        "missing": ([str(tmp_path / "nope.png")], "no such file"),
+        "directory": ([str(tmp_path)], "directory"),
+        "not an image": ([str(tmp_path / "text.png")], "not an image"),
+        "no ink": ([str(tmp_path / "white.png"), "--invert"], "no shape found"),
+        "zero agents": ([str(SHAPES / "line.png"), "--agents", "0"], "at least 1"),
+        "malformed toml": ([str(tmp_path / "bad.toml")], "not valid TOML"),
+        "unknown key": ([str(tmp_path / "typo.toml")], "unknown key 'shap'"),
+        "unknown strategy": ([str(SHAPES / "line.png"), "--strategy", "nope"], "unknown strategy"),
+    }
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        "missing",
+        "directory",
+        "not an image",
+        "no ink",
+        "zero agents",
+        "malformed toml",
+        "unknown key",
+        "unknown strategy",
+    ],
+)
+def test_bad_input_is_one_line_on_stderr_and_exit_code_2(tmp_path, case):
+    args, message = bad_inputs(tmp_path)[case]
+    result = swarmshape(*args, "--headless")
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("swarmshape: error: ")
+    assert message in lines[0]
+    assert "Traceback" not in result.stderr
