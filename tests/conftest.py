@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from swarmshape.shape import Shape
-from swarmshape.strategies import get
+from swarmshape.strategies import create
 from swarmshape.swarm import Swarm
 from swarmshape.world import GroupSpec, build_world
 
@@ -31,7 +31,12 @@ def grid_from(text: str) -> np.ndarray:
 
 
 def make_swarm(
-    grid: np.ndarray, *, agents: int | None = None, seed: int = 0, order: str = "outward"
+    grid: np.ndarray,
+    *,
+    agents: int | None = None,
+    seed: int = 0,
+    order: str = "outward",
+    strategy: str = "paper",
 ) -> Swarm:
     world = build_world([GroupSpec("test", Shape(grid), (200, 60, 60), agents)])
-    return Swarm(world, get("paper")(order=order), seed)
+    return Swarm(world, create(strategy, order=order), seed)

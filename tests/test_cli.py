@@ -27,7 +27,7 @@ def test_headless_run_prints_a_summary_and_writes_metrics(tmp_path, capsys):
     out = tmp_path / "m.json"
     code = main([str(SHAPES / "line.png"), "--headless", "--seed", "4", "--metrics", str(out)])
     assert code == 0
-    assert "line.png: paper, 16 agents" in capsys.readouterr().out
+    assert "line.png: optimal, 16 agents" in capsys.readouterr().out
     metrics = json.loads(out.read_text())
     assert set(metrics) >= METRIC_KEYS
     assert metrics["coverage"] == 1.0 and metrics["overlaps"] == 0 and metrics["seed"] == 4

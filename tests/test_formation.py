@@ -1,16 +1,20 @@
-"""Every shipped shape forms completely, without a single overlap, under the paper's strategy."""
+"""Every strategy forms every shipped shape and random bitmaps completely, without overlaps."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmshape.bitmap import load_grid
 from swarmshape.scenario import load_scenario
-from swarmshape.strategies import get
+from swarmshape.strategies import available, create
 from swarmshape.swarm import State, Swarm
 from swarmshape.world import build_world
 from tests.conftest import SHAPES, make_swarm
+
+STRATEGIES = sorted(available())
 
 PAPER_SHAPES = ("line.png", "square.png", "small-square.png", "horseshoe.png")
 DRAWN_SHAPES = ("star.png", "ring.png", "letter-s.png")
@@ -31,19 +35,21 @@ def formed(swarm: Swarm) -> Swarm:
     return swarm
 
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("name", PAPER_SHAPES + DRAWN_SHAPES)
-def test_forms_with_one_agent_per_cell(name):
+def test_forms_with_one_agent_per_cell(name, strategy):
     grid = shipped(name)
-    swarm = formed(make_swarm(grid, seed=11))
+    swarm = formed(make_swarm(grid, seed=11, strategy=strategy))
     assert (swarm.state == State.SETTLED).all()
     cells = {tuple(c) for c in swarm.cell.tolist()}
     assert cells == {tuple(c) for c in swarm.world.targets.tolist()}
 
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("name", PAPER_SHAPES + DRAWN_SHAPES)
-def test_spare_agents_wander_outside_the_shape_without_overlapping(name):
+def test_spare_agents_wander_outside_the_shape_without_overlapping(name, strategy):
     grid = shipped(name)
-    swarm = formed(make_swarm(grid, agents=grid.sum() + 6, seed=5))
+    swarm = formed(make_swarm(grid, agents=grid.sum() + 6, seed=5, strategy=strategy))
     wanderers = swarm.state == State.WANDERING
     assert wanderers.sum() == 6
     before = swarm.cell[wanderers].copy()
@@ -55,11 +61,12 @@ def test_spare_agents_wander_outside_the_shape_without_overlapping(name):
     assert (swarm.cell[wanderers] != before).any(), "spare agents should walk"
 
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
 @pytest.mark.parametrize("name", PAPER_SHAPES + DRAWN_SHAPES)
-def test_too_few_agents_form_a_smaller_copy(name):
+def test_too_few_agents_form_a_smaller_copy(name, strategy):
     grid = shipped(name)
     agents = max(1, int(grid.sum() * 0.6))
-    swarm = formed(make_swarm(grid, agents=agents, seed=3))
+    swarm = formed(make_swarm(grid, agents=agents, seed=3, strategy=strategy))
     group = swarm.world.groups[0]
     assert group.shape.scale < 1.0
     assert len(group.targets) <= agents
@@ -68,7 +75,7 @@ def test_too_few_agents_form_a_smaller_copy(name):
 def test_two_groups_form_at_the_same_time_with_two_movers():
     scenario = load_scenario(SHAPES / "two-squares.toml")
     world = build_world(list(scenario.groups), scenario.arena)
-    swarm = Swarm(world, get("paper")(), seed=4)
+    swarm = Swarm(world, create("paper"), seed=4)
     most_movers = 0
     while not swarm.complete and swarm.step_count < 100_000:
         swarm.step()
@@ -87,3 +94,29 @@ def test_same_seed_same_run_other_seed_other_run():
     assert np.array_equal(a.distance, b.distance)
     assert [m for m in a.queue.log] == [m for m in b.queue.log]
     assert [m.recipient for m in a.queue.log] != [m.recipient for m in c.queue.log]
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_concurrent_groups_form_side_by_side(strategy):
+    scenario = load_scenario(SHAPES / "two-squares.toml")
+    swarm = formed(Swarm(build_world(list(scenario.groups)), create(strategy), seed=6))
+    for group in (0, 1):
+        on = swarm.group == group
+        assert (swarm.world.target_group[swarm.target[on]] == group).all()
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    bits=st.lists(st.booleans(), min_size=30, max_size=30),
+    strategy=st.sampled_from(STRATEGIES),
+    spare=st.integers(-4, 4),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_random_bitmaps_form_deterministically_under_every_strategy(bits, strategy, spare, seed):
+    grid = np.array(bits).reshape(5, 6)
+    if not grid.any():
+        grid[2, 3] = True
+    agents = max(1, int(grid.sum()) + spare)
+    runs = [formed(make_swarm(grid, agents=agents, seed=seed, strategy=strategy)) for _ in "ab"]
+    assert runs[0].step_count == runs[1].step_count
+    assert np.array_equal(runs[0].cell, runs[1].cell)

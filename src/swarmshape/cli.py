@@ -29,6 +29,7 @@ from swarmshape.swarm import Params, Swarm
 from swarmshape.world import build_world
 
 DEFAULT_SHAPE = "horseshoe.png"
+DEFAULT_STRATEGY = "optimal"
 DEFAULT_MAX_STEPS = 500_000
 COMMANDS = ("run", "strategies")
 
@@ -63,8 +64,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
     run.add_argument("--agents", type=int, help="number of agents (default: one per cell)")
-    run.add_argument("--strategy", help="target assignment strategy (see 'swarmshape strategies')")
-    run.add_argument("--order", choices=ORDERS, help="fill order of the paper's target function")
+    run.add_argument(
+        "--strategy",
+        help=f"who goes where: a name from 'swarmshape strategies' or package.module:Class "
+        f"(default {DEFAULT_STRATEGY})",
+    )
+    run.add_argument(
+        "--order", choices=ORDERS, help="the paper strategy's fill order (default outward)"
+    )
     image = run.add_argument_group("image loading")
     image.add_argument(
         "--cells",
@@ -128,8 +135,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def list_strategies() -> int:
-    width = max(len(name) for name in strategies.REGISTRY)
-    for name, cls in sorted(strategies.REGISTRY.items()):
+    known = strategies.available()
+    width = max(len(name) for name in known)
+    for name, cls in sorted(known.items()):
         print(f"{name:<{width}}  {cls.description}")
     return 0
 
@@ -154,11 +162,12 @@ def prepare(args: argparse.Namespace) -> Prepared:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
         specs[0] = replace(specs[0], agents=args.agents)
     world = build_world(specs, args.arena or scenario.arena)
-    strategy_class = strategies.get(settings["strategy"])
+    strategies.get(settings["strategy"])  # fail now, not inside the window
     params = Params(limits=Limits(settings["max_speed"], settings["max_accel"]))
 
     def new_swarm() -> Swarm:
-        return Swarm(world, strategy_class(order=settings["order"]), settings["seed"], params)
+        strategy = strategies.create(settings["strategy"], order=settings["order"])
+        return Swarm(world, strategy, settings["seed"], params)
 
     return Prepared(scenario, settings, new_swarm)
 
@@ -184,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
 def _settings(scenario: Scenario, args: argparse.Namespace) -> dict[str, Any]:
     """Command-line options win over the scenario's values, which win over defaults."""
     defaults = {
-        "strategy": "paper",
+        "strategy": DEFAULT_STRATEGY,
         "order": "outward",
         "seed": None,
         "max_steps": DEFAULT_MAX_STEPS,

@@ -19,7 +19,8 @@ STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
 
 FREE = -1
 SEED = -2
-"""Occupancy codes besides agent indices."""
+WALL = -3
+"""Occupancy codes besides agent indices (WALL: the ring of cells around the arena)."""
 
 TOUCH = 1.0 - 1e-9
 """Squares whose centres are closer than this on both axes overlap; touching is allowed."""
@@ -62,22 +63,38 @@ def positions(cell: np.ndarray, direction: np.ndarray, offset: np.ndarray) -> np
     return cell + 0.5 + offset[:, None] * STEPS[direction]
 
 
-def resolve_claims(
-    cells: np.ndarray, size: tuple[int, int], rng: np.random.Generator
-) -> np.ndarray:
-    """Among claims on the same cell, pick one winner at random; return a winner mask."""
-    if len(cells) == 0:
-        return np.zeros(0, dtype=bool)
-    shuffled = rng.permutation(len(cells))
-    keys = cells[shuffled, 0] * size[1] + cells[shuffled, 1]
-    _, first = np.unique(keys, return_index=True)
-    wins = np.zeros(len(cells), dtype=bool)
+def resolve_claims(keys: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Among claims on the same cell key, pick one winner at random; return a winner mask."""
+    shuffled = rng.permutation(len(keys))
+    _, first = np.unique(keys[shuffled], return_index=True)
+    wins = np.zeros(len(keys), dtype=bool)
     wins[shuffled[first]] = True
     return wins
 
 
 def inside(cells: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     return (cells >= 0).all(axis=1) & (cells < np.array(size)).all(axis=1)
+
+
+def overlap_candidates(pos: np.ndarray) -> np.ndarray:
+    """Indices of squares that share a grid cell with another square's footprint.
+
+    Squares that overlap must share a cell, so this cheap test (every square marks the up to
+    four cells it covers) finds every overlap; `overlapping_pairs` then checks the few suspects.
+    """
+    if len(pos) < 2:
+        return np.zeros(0, dtype=np.int64)
+    low = np.floor(pos - 0.5 + (1.0 - TOUCH)).astype(np.int64)
+    high = np.floor(pos + 0.5 - (1.0 - TOUCH)).astype(np.int64)
+    low, high = low - low.min(axis=0), high - low.min(axis=0)
+    wide, tall = high[:, 0] > low[:, 0], high[:, 1] > low[:, 1]
+    xs = np.concatenate([low[:, 0], high[:, 0][wide], low[:, 0][tall], high[:, 0][wide & tall]])
+    ys = np.concatenate([low[:, 1], low[:, 1][wide], high[:, 1][tall], high[:, 1][wide & tall]])
+    index = np.arange(len(pos))
+    owners = np.concatenate([index, index[wide], index[tall], index[wide & tall]])
+    cells = xs * (int(high[:, 1].max()) + 1) + ys
+    shared = np.bincount(cells)[cells] > 1
+    return np.unique(owners[shared])
 
 
 def overlapping_pairs(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

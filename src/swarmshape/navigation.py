@@ -1,5 +1,7 @@
 """Which way a moving agent should step next to reach its target.
 
+`straight_preferences` is the concurrent movers' rule: of the (at most two) directions that
+bring an agent closer, keep going the way it goes, else close the longer gap first.
 `FieldPlanner` is the paper's navigator for few movers: a breadth-first distance field from the
 target over the cells not blocked by resting agents or seeds, followed downhill. Fields are
 cached per agent and recomputed when the agent is told its view is stale (it got blocked).
@@ -19,6 +21,21 @@ LONG_AXIS_BONUS = 0.1
 longer remaining axis first, so paths are L-shaped rather than staircases."""
 
 
+def straight_preferences(
+    origin: np.ndarray, goal: np.ndarray, current: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Preferred and second direction index (0 = none) from `origin` toward `goal`."""
+    dx, dy = (goal - origin).T
+    along_x = np.where(dx > 0, 1, np.where(dx < 0, 2, 0))
+    along_y = np.where(dy > 0, 3, np.where(dy < 0, 4, 0))
+    x_first = np.abs(dx) >= np.abs(dy)
+    x_first = np.where((current == along_x) & (along_x > 0), True, x_first)
+    x_first = np.where((current == along_y) & (along_y > 0), False, x_first)
+    first = np.where(x_first, along_x, along_y)
+    second = np.where(x_first, along_y, along_x)
+    return np.where(first > 0, first, second), np.where(first > 0, second, 0)
+
+
 class FieldPlanner:
     """Breadth-first distance fields over the arena, one per moving agent."""
 
@@ -33,6 +50,7 @@ class FieldPlanner:
             ]
         )
         self._fields: dict[int, np.ndarray] = {}
+        self._no_field = np.full(width * height, np.inf)
 
     def field(self, goal: np.ndarray, passable: np.ndarray) -> np.ndarray:
         """Steps from every cell to `goal` moving through `passable` cells (inf if cut off)."""
@@ -62,10 +80,13 @@ class FieldPlanner:
     def directions(
         self, agents: np.ndarray, cells: np.ndarray, goals: np.ndarray, current: np.ndarray
     ) -> np.ndarray:
-        """Direction index (0 = none) of the best downhill step from each agent's `cells`."""
+        """Direction index of the best downhill step from each agent's `cells`.
+
+        0 where no step leads closer, or where the agent has no field (it must plan first).
+        """
         if len(agents) == 0:
             return np.zeros(0, dtype=np.int64)
-        fields = np.stack([self._fields[a] for a in agents.tolist()])
+        fields = np.stack([self._fields.get(a, self._no_field) for a in agents.tolist()])
         neighbours = cells[:, None, :] + STEPS[None, 1:, :]
         valid = inside(neighbours.reshape(-1, 2), self.size).reshape(-1, 4)
         flat = np.where(valid, neighbours[..., 0] * self.size[1] + neighbours[..., 1], 0)

@@ -20,18 +20,23 @@ from swarmshape.motion import (
     SEED,
     STEPS,
     TOUCH,
+    WALL,
     Limits,
     advance,
-    inside,
+    overlap_candidates,
     overlapping_pairs,
     positions,
     resolve_claims,
 )
-from swarmshape.navigation import FieldPlanner
+from swarmshape.navigation import FieldPlanner, straight_preferences
 
 if TYPE_CHECKING:
     from swarmshape.strategies import Strategy
     from swarmshape.world import World
+
+
+RING_SEARCH = 64
+"""Longest ring of movers waiting for each other that is detected and rotated."""
 
 
 class State(IntEnum):
@@ -48,18 +53,25 @@ class Params:
     limits: Limits = field(default_factory=Limits)
     wander_rate: float = 0.1
     """Chance per step that a resting wanderer tries a random step."""
-    patience: int = 6
-    """Steps a blocked mover waits before it replans; after twice as many it sidesteps."""
+    patience: int = 10
+    """Steps a mover waits behind a resting agent before it replans; twice that, it sidesteps."""
 
 
 class Swarm:
-    """One run: the world, the agents' arrays, the message queue and the one random generator."""
+    """One run: the world, the agents' arrays, the message queue and the one random generator.
+
+    Movers of a *concurrent* strategy steer straight for their targets and swap targets with a
+    settled agent of their group that stands in the way (TSWAP, Okumura and Defago 2023), so a
+    target walled in by others is passed inward instead of deadlocking; they plan a path only
+    around fixed obstacles. Movers of a one-at-a-time strategy (the paper's) always plan paths.
+    """
 
     def __init__(
         self, world: World, strategy: Strategy, seed: int, params: Params | None = None
     ) -> None:
         self.world = world
         self.strategy = strategy
+        self.concurrent = bool(getattr(strategy, "concurrent", True))
         self.seed = seed
         self.params = params or Params()
         self.rng = np.random.default_rng(seed)
@@ -75,11 +87,25 @@ class Swarm:
         self.state = np.full(n, State.WAITING, dtype=np.int8)
         self.target = np.full(n, -1, dtype=np.int64)
         self.blocked = np.zeros(n, dtype=np.int64)
-        self.occupancy = np.full(world.size, FREE, dtype=np.int64)
+        self.routed = np.zeros(n, dtype=bool)
+        """Agents that follow a planned path instead of steering straight."""
+        width, height = world.size
+        self._stride = height + 2
+        self._neighbour = np.array([0, self._stride, -self._stride, 1, -1])
+        padded = np.full((width + 2, height + 2), WALL, dtype=np.int64)
+        self.occupancy = padded[1:-1, 1:-1]
+        """Per cell ``[x, y]``: the agent holding it, FREE or SEED (a view of a walled grid)."""
+        self._occupancy = padded.reshape(-1)
+        self.occupancy[...] = FREE
         self.occupancy[world.seeds[:, 0], world.seeds[:, 1]] = SEED
         self.occupancy[self.cell[:, 0], self.cell[:, 1]] = np.arange(n)
         self.filled = np.zeros(len(world.targets), dtype=bool)
         self.target_mask = world.mask(world.targets)
+        owner = np.full(world.size, -1)
+        owner[world.targets[:, 0], world.targets[:, 1]] = world.target_group
+        self._owner = np.pad(owner, 1, constant_values=-1).reshape(-1)
+        """Per walled-grid key: the group whose target is there, or -1."""
+        self._targets_per_group = np.array([len(g.targets) for g in world.groups])
         self.queue = MessageQueue()
         self.planner = FieldPlanner(world.size)
         self.step_count = 0
@@ -102,6 +128,7 @@ class Swarm:
         self.state[agents] = State.MOVING
         self.target[agents] = targets
         self.blocked[agents] = 0
+        self.routed[agents] = not self.concurrent
         self.planner.forget(agents)
 
     def release(self, agents: np.ndarray) -> None:
@@ -145,112 +172,210 @@ class Swarm:
         while not self.complete and self.step_count < max_steps:
             self.step()
 
+    def _key(self, cells: np.ndarray) -> np.ndarray:
+        """Flat index into the walled occupancy grid."""
+        return (cells[:, 0] + 1) * self._stride + cells[:, 1] + 1
+
     def _reserve(self) -> None:
         """Every agent that wants a next cell claims it; free cells go to one claimant each."""
+        patience = self.params.patience
         moving = self.state == State.MOVING
         starters = np.flatnonzero(moving & (self.ahead == 0))
-        stuck = starters[self.blocked[starters] >= 2 * self.params.patience]
-        starters = starters[self.blocked[starters] < 2 * self.params.patience]
+        # long-blocked movers sidestep, each with even odds per step, so two agents stuck on
+        # each other do not dodge in lockstep
+        stuck = starters[self.blocked[starters] >= 2 * patience]
+        if len(stuck):
+            stuck = stuck[self.rng.random(len(stuck)) < 0.5]
+            starters = np.setdiff1d(starters, stuck, assume_unique=True)
         cruisers = np.flatnonzero(moving & (self.ahead == 1))
-        cruisers = cruisers[[self.planner.has_plan(a) for a in cruisers.tolist()]]
-        self._plan(starters)
-        planners = np.concatenate([starters, cruisers])
-        origin = self.cell[planners] + STEPS[self.direction[planners]] * self.ahead[planners, None]
-        goals = self.world.targets[self.target[planners]]
-        wanted = self.planner.directions(planners, origin, goals, self.direction[planners])
-        straight = np.ones(len(planners), dtype=bool)
-        straight[len(starters) :] = wanted[len(starters) :] == self.direction[cruisers]
-        keep = (wanted > 0) & straight
+        self._plan(starters[self.routed[starters]])
+        movers = np.concatenate([starters, cruisers])
+        origin = self.cell[movers] + STEPS[self.direction[movers]] * self.ahead[movers, None]
+        first, second = self._preferences(movers, origin)
+        origin_key = self._key(origin)
+        groups = self.group[movers]
+        first_free = self._enterable(origin_key + self._neighbour[first], groups)
+        second_free = self._enterable(origin_key + self._neighbour[second], groups)
+        is_starter = np.arange(len(movers)) < len(starters)
+        use_second = ~first_free & second_free & (second > 0) & is_starter
+        chosen = np.where(use_second, second, first)
+        may = (chosen > 0) & (first_free | use_second)
+        may &= is_starter | (chosen == self.direction[movers])
 
-        pushed = self._idle_in_the_way(starters, origin[: len(starters)], wanted[: len(starters)])
+        waiting_starters = ~may[: len(starters)]
+        blocked, blocked_first = (
+            starters[waiting_starters],
+            first[: len(starters)][waiting_starters],
+        )
+        blocked_at = origin_key[: len(starters)][waiting_starters] + self._neighbour[blocked_first]
+        foreign = self._owner[blocked_at] >= 0
+        foreign &= self._owner[blocked_at] != self.group[blocked]
+        blocker = np.where((blocked_first > 0) & ~foreign, self._occupancy[blocked_at], WALL)
+        pushed = self._make_way(blocked, blocker)
+
         roaming = np.flatnonzero(
             (self.state == State.WANDERING)
             & (self.ahead == 0)
             & (self.rng.random(len(self.state)) < self.params.wander_rate)
         )
         steppers = np.unique(np.concatenate([pushed, roaming]))
-        random_dirs = np.concatenate(
+        agents = np.concatenate([movers[may], steppers, stuck])
+        dirs = np.concatenate(
             [
-                self._random_free_step(steppers, avoid_shape=True),
-                self._random_free_step(stuck, avoid_shape=False),
+                chosen[may],
+                self._random_free_step(steppers, own_shape_too=True),
+                self._random_free_step(stuck, own_shape_too=False),
             ]
         )
-        agents = np.concatenate([planners[keep], steppers, stuck])
-        dirs = np.concatenate([wanted[keep], random_dirs])
-        froms = np.concatenate([origin[keep], self.cell[steppers], self.cell[stuck]])
-        chosen = dirs > 0
-        agents, dirs, froms = agents[chosen], dirs[chosen], froms[chosen]
-        cells = froms + STEPS[dirs]
-        free = np.zeros(len(cells), dtype=bool)
-        ok = inside(cells, self.world.size)
-        free[ok] = self.occupancy[cells[ok, 0], cells[ok, 1]] == FREE
-        wins = np.zeros(len(cells), dtype=bool)
-        wins[free] = resolve_claims(cells[free], self.world.size, self.rng)
-        winners, won_cells = agents[wins], cells[wins]
-        self.occupancy[won_cells[:, 0], won_cells[:, 1]] = winners
+        froms = np.concatenate(
+            [origin_key[may], self._key(self.cell[steppers]), self._key(self.cell[stuck])]
+        )
+        claim = dirs > 0
+        agents, dirs, keys = agents[claim], dirs[claim], froms[claim] + self._neighbour[dirs[claim]]
+        wins = self._occupancy[keys] == FREE
+        wins[wins] = resolve_claims(keys[wins], self.rng)
+        winners = agents[wins]
+        self._occupancy[keys[wins]] = winners
         self.ahead[winners] += 1
         self.direction[winners] = dirs[wins]
 
-        got = np.isin(starters, winners)
-        self.blocked[starters[got]] = 0
-        self.blocked[starters[~got]] += 1
-        if len(stuck):
-            self.blocked[stuck] = 0
-        replan = starters[self.blocked[starters] == self.params.patience]
+        moved = np.zeros(len(self.state), dtype=bool)
+        moved[winners] = True
+        self.blocked[stuck] = 0
+        self.blocked[starters[moved[starters]]] = 0
+        self.blocked[blocked[self._counts_as_waiting(blocker)]] += 1
+        replan = starters[self.blocked[starters] == patience]
         self.planner.forget(np.concatenate([replan, stuck]))
 
+    def _preferences(self, movers: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each mover's preferred and second-best direction (0 for none)."""
+        goals = self.world.targets[self.target[movers]]
+        first, second = straight_preferences(origin, goals, self.direction[movers])
+        routed = self.routed[movers]
+        if routed.any():
+            first[routed] = self.planner.directions(
+                movers[routed], origin[routed], goals[routed], self.direction[movers[routed]]
+            )
+            second[routed] = 0
+        return first, second
+
+    def _make_way(self, blocked: np.ndarray, blocker: np.ndarray) -> np.ndarray:
+        """Resolve what stands in blocked movers' way; return idle agents asked to step aside.
+
+        Idle agents (waiting or wandering, at rest) step aside. In concurrent mode a settled
+        agent of the same group swaps targets with the mover, a ring of resting movers each
+        waiting for the next rotates its targets, and a seed or another group's settled agent
+        makes the mover plan a path around it.
+        """
+        agent = np.maximum(blocker, 0)
+        is_agent = blocker >= 0
+        state = self.state[agent]
+        at_rest = self.ahead[agent] == 0
+        idle = is_agent & at_rest & ((state == State.WAITING) | (state == State.WANDERING))
+        if not self.concurrent:
+            return blocker[idle]
+        same_group = is_agent & (self.group[agent] == self.group[blocked])
+        settled = is_agent & (state == State.SETTLED)
+        waits_for_mover = same_group & at_rest & (state == State.MOVING)
+        self._rotate_rings(blocked[waits_for_mover], agent[waits_for_mover])
+        swap = settled & same_group
+        self._swap_with_settled(blocked[swap], agent[swap])
+        fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group)
+        self.routed[blocked[fixed]] = True
+        return blocker[idle]
+
+    def _rotate_rings(self, waiting: np.ndarray, waited_for: np.ndarray) -> None:
+        """Where resting movers wait for each other in a ring, pass each target one step on.
+
+        Each agent in the ring is one cell closer to the target of the agent waiting for it
+        than that agent is, so taking over that target shortens every trip (TSWAP's rule).
+        """
+        if len(waiting) < 2:
+            return
+        next_of = np.full(len(self.state), -1)
+        next_of[waiting] = waited_for
+        walker = waiting.copy()
+        in_ring = np.zeros(len(waiting), dtype=bool)
+        for _ in range(min(len(waiting), RING_SEARCH)):
+            walker = np.where(walker >= 0, next_of[np.maximum(walker, 0)], -1)
+            in_ring |= walker == waiting
+        members = waiting[in_ring]
+        targets = self.target[members]
+        self.target[next_of[members]] = targets
+        self.blocked[members] = 0
+        self.planner.forget(members)
+
+    def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
+        """A settled agent in a mover's way takes the mover's target; the mover takes its cell."""
+        if len(movers) == 0:
+            return
+        _, first = np.unique(settled, return_index=True)
+        movers, settled = movers[first], settled[first]
+        self.filled[self.target[settled]] = False
+        self.state[settled] = State.MOVING
+        self.target[movers], self.target[settled] = self.target[settled], self.target[movers].copy()
+        both = np.concatenate([movers, settled])
+        self.blocked[both] = 0
+        self.planner.forget(both)
+
+    def _counts_as_waiting(self, blocker: np.ndarray) -> np.ndarray:
+        """Blocked by something that is not itself on the move (so waiting may never end)."""
+        agent = np.maximum(blocker, 0)
+        return (blocker < 0) | (self.ahead[agent] == 0)
+
     def _plan(self, starters: np.ndarray) -> None:
-        """Give each starter without a field one, in the strictest view that reaches its goal."""
+        """Give each routed starter without a field one, in the strictest view that works.
+
+        Nobody enters a seed or another group's shape. One at a time, a mover also goes around
+        every agent if it can, else around resting ones, else around settled ones only.
+        Concurrent movers go around nothing else: they swap with whoever is in their way.
+        """
         needing = [a for a in starters.tolist() if not self.planner.has_plan(a)]
         if not needing:
             return
         occupant = self.occupancy
         agent_here = occupant >= 0
-        resting = agent_here & (self.state[np.maximum(occupant, 0)] != State.MOVING)
-        settled = agent_here & (self.state[np.maximum(occupant, 0)] == State.SETTLED)
-        views = [~agent_here, ~resting, ~settled]
-        views = [view & (occupant != SEED) for view in views]
-        for agent in needing:
-            cell = self.cell[agent]
-            own = []
-            for view in views:
-                mine = view.copy()
-                mine[cell[0], cell[1]] = True
-                own.append(mine)
-            self.planner.plan(agent, cell, self.world.targets[self.target[agent]], own)
+        holder = np.maximum(occupant, 0)
+        settled = agent_here & (self.state[holder] == State.SETTLED)
+        resting = agent_here & (self.state[holder] != State.MOVING)
+        owner = self._owner.reshape(occupant.shape[0] + 2, -1)[1:-1, 1:-1]
+        for group in np.unique(self.group[needing]).tolist():
+            fixed = (occupant == SEED) | ((owner >= 0) & (owner != group))
+            if self.concurrent:
+                views = [~fixed]
+            else:
+                views = [~fixed & ~agent_here, ~fixed & ~resting, ~fixed & ~settled]
+            for agent in [a for a in needing if self.group[a] == group]:
+                cell = self.cell[agent]
+                own = [view.copy() for view in views]
+                for view in own:
+                    view[cell[0], cell[1]] = True
+                self.planner.plan(agent, cell, self.world.targets[self.target[agent]], own)
 
-    def _idle_in_the_way(
-        self, starters: np.ndarray, origin: np.ndarray, wanted: np.ndarray
-    ) -> np.ndarray:
-        """Resting waiting or wandering agents on a cell a starter wants: asked to step aside."""
-        ahead_cells = origin[wanted > 0] + STEPS[wanted[wanted > 0]]
-        ahead_cells = ahead_cells[inside(ahead_cells, self.world.size)]
-        occupant = self.occupancy[ahead_cells[:, 0], ahead_cells[:, 1]]
-        occupant = occupant[occupant >= 0]
-        idle = (self.state[occupant] == State.WAITING) | (self.state[occupant] == State.WANDERING)
-        return occupant[idle & (self.ahead[occupant] == 0)]
+    def _enterable(self, keys: np.ndarray, groups: np.ndarray) -> np.ndarray:
+        """Free cells that are not another group's target (a group's shape is its own)."""
+        owner = self._owner[keys]
+        return (self._occupancy[keys] == FREE) & ((owner < 0) | (owner == groups))
 
-    def _random_free_step(self, agents: np.ndarray, *, avoid_shape: bool) -> np.ndarray:
-        """A random direction to a free neighbour cell for each agent (0 where there is none)."""
+    def _random_free_step(self, agents: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
+        """A random direction to an enterable neighbour cell (0 where there is none).
+
+        Idle agents keep out of every shape, their own group's included.
+        """
         if len(agents) == 0:
             return np.zeros(0, dtype=np.int64)
-        near = self.cell[agents][:, None, :] + STEPS[None, 1:, :]
-        flat = near.reshape(-1, 2)
-        ok = inside(flat, self.world.size)
-        clipped = np.clip(flat, 0, np.array(self.world.size) - 1)
-        ok &= self.occupancy[clipped[:, 0], clipped[:, 1]] == FREE
-        if avoid_shape:
-            ok &= ~self.target_mask[clipped[:, 0], clipped[:, 1]]
-        score = np.where(ok.reshape(-1, 4), self.rng.random((len(agents), 4)), -1.0)
+        near = self._key(self.cell[agents])[:, None] + self._neighbour[None, 1:]
+        groups = np.full(len(agents), -1) if own_shape_too else self.group[agents]
+        ok = self._enterable(near, groups[:, None])
+        score = np.where(ok, self.rng.random((len(agents), 4)), -1.0)
         best = np.argmax(score, axis=1)
         return np.where(score.max(axis=1) >= 0, best + 1, 0)
 
     def _move(self) -> None:
         self.distance += advance(self.offset, self.speed, self.ahead, self.params.limits)
         arrived = np.flatnonzero((self.ahead > 0) & (self.offset >= TOUCH))
-        left = self.cell[arrived].copy()
+        self._occupancy[self._key(self.cell[arrived])] = FREE
         self.cell[arrived] += STEPS[self.direction[arrived]]
-        self.occupancy[left[:, 0], left[:, 1]] = FREE
         self.ahead[arrived] -= 1
         self.offset[arrived] -= 1.0
         stopped = arrived[self.ahead[arrived] == 0]
@@ -258,7 +383,7 @@ class Swarm:
         self.speed[stopped] = 0.0
 
     def _settle(self) -> np.ndarray:
-        """Moving agents resting on their own target settle there for good."""
+        """Moving agents resting on their own target settle there."""
         candidates = np.flatnonzero((self.state == State.MOVING) & (self.ahead == 0))
         goals = self.world.targets[self.target[candidates]]
         done = candidates[(self.cell[candidates] == goals).all(axis=1)]
@@ -268,14 +393,20 @@ class Swarm:
         return done
 
     def _observe(self) -> None:
-        """Count overlapping pairs (seeds included) and note when each group completed."""
+        """Count overlapping pairs (seeds included); note completed groups, free their spares."""
         everything = np.concatenate([self.positions(), self.world.seeds + 0.5])
-        owner = np.concatenate([self.group, self._seed_group])
-        i, j = overlapping_pairs(everything)
-        self.overlap_total += len(i)
-        np.add.at(self.overlaps, owner[i], 1)
-        cross = owner[i] != owner[j]
-        np.add.at(self.overlaps, owner[j][cross], 1)
-        for g in range(len(self.world.groups)):
-            if self.completed_at[g] is None and self.filled[self.world.target_group == g].all():
-                self.completed_at[g] = self.step_count
+        suspects = overlap_candidates(everything)
+        if len(suspects):
+            owner = np.concatenate([self.group, self._seed_group])[suspects]
+            i, j = overlapping_pairs(everything[suspects])
+            self.overlap_total += len(i)
+            np.add.at(self.overlaps, owner[i], 1)
+            cross = owner[i] != owner[j]
+            np.add.at(self.overlaps, owner[j][cross], 1)
+        if None in self.completed_at:
+            groups = len(self.world.groups)
+            filled = np.bincount(self.world.target_group[self.filled], minlength=groups)
+            for g in np.flatnonzero(filled == self._targets_per_group).tolist():
+                if self.completed_at[g] is None:
+                    self.completed_at[g] = self.step_count
+                    self.release(self.waiting(g))

@@ -2,7 +2,7 @@
 
 The seeds send the first "go to target T" message to a random waiting robot. Whenever a robot
 settles it sends the next target of the fill order to another waiting robot, chosen at random.
-When a group's targets run out, its remaining robots wander.
+When a group's shape is complete its remaining robots wander (the core sees to that).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 @register
 class Paper:
     name: ClassVar[str] = "paper"
+    concurrent: ClassVar[bool] = False
     description: ClassVar[str] = "one mover per group at a time, targets handed on by message"
 
     def __init__(self, order: str = "outward") -> None:
@@ -45,12 +46,9 @@ class Paper:
             self._hand_on(swarm, int(swarm.group[agent]), agent)
 
     def _hand_on(self, swarm: Swarm, group: int, sender: int) -> None:
-        """Send the group's next target to a random waiting robot, or let the rest wander."""
+        """Send the group's next target to a random waiting robot, while targets remain."""
         waiting = swarm.waiting(group)
-        if self._next[group] == len(self._sequence[group]):
-            swarm.release(waiting)
-            return
-        if len(waiting) == 0:
+        if self._next[group] == len(self._sequence[group]) or len(waiting) == 0:
             return
         recipient = int(swarm.rng.choice(waiting))
         swarm.send(sender, recipient, int(self._sequence[group][self._next[group]]))
