@@ -51,15 +51,18 @@ def greedy(agents: np.ndarray, targets: np.ndarray, rng: np.random.Generator) ->
 def optimal(agents: np.ndarray, targets: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Least total squared distance (CAPT: such paths do not cross in free space).
 
-    Exact with the Hungarian method up to `EXACT_LIMIT`; above it, recursive bisection:
-    split the targets at the median of the longer axis, give each half the agents that come
-    first along that axis in proportion, and solve parts of `LEAF` targets exactly.
+    Exact with the Hungarian method up to `EXACT_LIMIT`; above it, the agents nearest to the
+    shape are taken, one per target, and recursive bisection splits the targets at the median
+    of the longer axis, gives each half the agents that come first along that axis, and solves
+    parts of `LEAF` targets exactly.
     """
     chosen = np.empty(len(targets), dtype=np.int64)
     if len(agents) * len(targets) <= EXACT_LIMIT:
         chosen[:] = _hungarian(agents, targets)
-    else:
-        _bisect(agents, targets, np.arange(len(agents)), np.arange(len(targets)), chosen)
+        return chosen
+    nearest, _ = cKDTree(targets).query(agents)
+    taken = np.argsort(nearest, kind="stable")[: len(targets)]
+    _bisect(agents, targets, taken, np.arange(len(targets)), chosen)
     return chosen
 
 
@@ -79,9 +82,8 @@ def _bisect(
     t = t[np.argsort(targets[t, axis], kind="stable")]
     a = a[np.argsort(agents[a, axis], kind="stable")]
     half = len(t) // 2
-    share = round(len(a) * half / len(t))
-    _bisect(agents, targets, a[:share], t[:half], out)
-    _bisect(agents, targets, a[share:], t[half:], out)
+    _bisect(agents, targets, a[:half], t[:half], out)
+    _bisect(agents, targets, a[half:], t[half:], out)
 
 
 def manhattan_lower_bounds(agents: np.ndarray, targets: np.ndarray) -> tuple[float, float, bool]:

@@ -6,6 +6,12 @@
   agents, counted inside the shape's bounding box; stray agents lying on the picture lower it.
 - ``total_distance``: cells travelled by all agents of the group.
 - ``overlaps``: overlapping pairs of squares, summed over every step (always 0 when correct).
+- ``makespan_lower_bound``: no run can finish sooner: the longest lattice distance in a
+  bottleneck-optimal assignment from the start cells, divided by the maximum speed, in steps.
+- ``distance_lower_bound``: the least total lattice distance of any assignment.
+- ``makespan_ratio``, ``distance_ratio``: what the run achieved over those bounds (>= 1).
+- ``lower_bounds_exact``: False above 1,500 x 1,500, where each target's nearest-agent
+  distance stands in (still a bound, only looser).
 """
 
 from __future__ import annotations
@@ -14,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmshape.assignment import manhattan_lower_bounds
 from swarmshape.swarm import Swarm
 
 DIGITS = 6
@@ -35,7 +42,28 @@ def group_metrics(swarm: Swarm, group: int) -> dict[str, Any]:
         ),
         "total_distance": round(float(swarm.distance[members].sum()), DIGITS),
         "overlaps": int(swarm.overlaps[group]),
+        **_against_bounds(swarm, members, placed.targets, swarm.completed_at[group]),
     }
+
+
+def _against_bounds(
+    swarm: Swarm, members: np.ndarray, targets: np.ndarray, steps: int | None
+) -> dict[str, Any]:
+    longest, total, exact = manhattan_lower_bounds(swarm.start_cell[members], targets)
+    makespan = longest / swarm.params.limits.max_speed
+    return {
+        "makespan_lower_bound": round(makespan, DIGITS),
+        "distance_lower_bound": round(total, DIGITS),
+        "makespan_ratio": _ratio(steps, makespan),
+        "distance_ratio": _ratio(float(swarm.distance[members].sum()), total),
+        "lower_bounds_exact": exact,
+    }
+
+
+def _ratio(achieved: float | None, bound: float) -> float | None:
+    if achieved is None or bound <= 0:
+        return None
+    return round(achieved / bound, DIGITS)
 
 
 def _iou(targets: np.ndarray, occupied: np.ndarray) -> float:
@@ -67,8 +95,28 @@ def run_metrics(swarm: Swarm, shape: str, strategy: str) -> dict[str, Any]:
         "total_distance": round(float(swarm.distance.sum()), DIGITS),
         "overlaps": int(swarm.overlap_total),
         "messages": len(swarm.queue.log),
+        **_totals_against_bounds(groups, steps),
         "groups": groups,
     }
+
+
+def _totals_against_bounds(groups: list[dict[str, Any]], steps: list[int | None]) -> dict:
+    """Groups move in parallel: the run's makespan bound is the largest, distances add up."""
+    makespan = max(g["makespan_lower_bound"] for g in groups)
+    total = sum(g["distance_lower_bound"] for g in groups)
+    moved = sum(g["total_distance"] for g in groups)
+    return {
+        "makespan_lower_bound": makespan,
+        "distance_lower_bound": round(total, DIGITS),
+        "makespan_ratio": _ratio(None if None in steps else max(steps), makespan),
+        "distance_ratio": _ratio(moved, total),
+        "lower_bounds_exact": all(g["lower_bounds_exact"] for g in groups),
+    }
+
+
+def _versus(metrics: dict[str, Any]) -> str:
+    ratio = metrics["makespan_ratio"]
+    return "" if ratio is None else f", {ratio:.2f}x the makespan lower bound"
 
 
 def summary_line(metrics: dict[str, Any]) -> str:
@@ -82,5 +130,5 @@ def summary_line(metrics: dict[str, Any]) -> str:
         f"{metrics['shape']}: {metrics['strategy']}, {metrics['agents']} agents, "
         f"{metrics['targets']} targets, scale {metrics['scale']:.2f}: {formed}, "
         f"coverage {100 * metrics['coverage']:.1f}%, iou {metrics['iou']:.3f}, "
-        f"{metrics['overlaps']} overlaps, seed {metrics['seed']}"
+        f"{metrics['overlaps']} overlaps, seed {metrics['seed']}{_versus(metrics)}"
     )

@@ -79,6 +79,7 @@ class Swarm:
         self.group = np.repeat(np.arange(len(world.groups)), [g.agents for g in world.groups])
         starts = world.start_cells()
         self.cell = starts[self.rng.choice(len(starts), n, replace=False)]
+        self.start_cell = self.cell.copy()
         self.direction = np.zeros(n, dtype=np.int64)
         self.ahead = np.zeros(n, dtype=np.int64)
         self.offset = np.zeros(n)
