@@ -1,7 +1,8 @@
 """Which way a moving agent should step next to reach its target.
 
 `straight_preferences` is the concurrent movers' rule: of the (at most two) directions that
-bring an agent closer, keep going the way it goes, else close the longer gap first.
+bring an agent closer, keep going the way it goes, else take the L-shaped path that crosses
+fewer cells of the shape.
 `FieldPlanner` is the paper's navigator for few movers: a breadth-first distance field from the
 target over the cells not blocked by resting agents or seeds, followed downhill. Fields are
 cached per agent and recomputed when the agent is told its view is stale (it got blocked).
@@ -21,14 +22,46 @@ LONG_AXIS_BONUS = 0.1
 longer remaining axis first, so paths are L-shaped rather than staircases."""
 
 
+class CrossingCounter:
+    """How many shape cells each of the two L-shaped paths between two cells crosses.
+
+    Prefix sums along rows and columns make every count O(1), for any number of agents.
+    """
+
+    def __init__(self, shape_mask: np.ndarray) -> None:
+        counts = shape_mask.astype(np.int64)
+        self._along_x = np.vstack([np.zeros((1, counts.shape[1]), np.int64), counts.cumsum(0)])
+        self._along_y = np.hstack([np.zeros((counts.shape[0], 1), np.int64), counts.cumsum(1)])
+
+    def _row(self, y: np.ndarray, xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
+        low, high = np.minimum(xa, xb), np.maximum(xa, xb)
+        return self._along_x[high + 1, y] - self._along_x[low, y]
+
+    def _column(self, x: np.ndarray, ya: np.ndarray, yb: np.ndarray) -> np.ndarray:
+        low, high = np.minimum(ya, yb), np.maximum(ya, yb)
+        return self._along_y[x, high + 1] - self._along_y[x, low]
+
+    def x_first_crosses_less(self, origin: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """True where going along x first crosses fewer shape cells than y first."""
+        (x0, y0), (x1, y1) = origin.T, goal.T
+        x_first = self._row(y0, x0, x1) + self._column(x1, y0, y1)
+        y_first = self._column(x0, y0, y1) + self._row(y1, x0, x1)
+        return x_first < y_first, x_first == y_first
+
+
 def straight_preferences(
-    origin: np.ndarray, goal: np.ndarray, current: np.ndarray
+    origin: np.ndarray, goal: np.ndarray, current: np.ndarray, crossings: CrossingCounter
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Preferred and second direction index (0 = none) from `origin` toward `goal`."""
+    """Preferred and second direction index (0 = none) from `origin` toward `goal`.
+
+    Keep going the way the agent goes; else take the L-shaped path through fewer shape cells
+    (settled agents there would have to swap), else close the longer gap first.
+    """
     dx, dy = (goal - origin).T
     along_x = np.where(dx > 0, 1, np.where(dx < 0, 2, 0))
     along_y = np.where(dy > 0, 3, np.where(dy < 0, 4, 0))
-    x_first = np.abs(dx) >= np.abs(dy)
+    fewer, tie = crossings.x_first_crosses_less(origin, goal)
+    x_first = np.where(tie, np.abs(dx) >= np.abs(dy), fewer)
     x_first = np.where((current == along_x) & (along_x > 0), True, x_first)
     x_first = np.where((current == along_y) & (along_y > 0), False, x_first)
     first = np.where(x_first, along_x, along_y)

@@ -28,7 +28,7 @@ from swarmshape.motion import (
     positions,
     resolve_claims,
 )
-from swarmshape.navigation import FieldPlanner, straight_preferences
+from swarmshape.navigation import CrossingCounter, FieldPlanner, straight_preferences
 
 if TYPE_CHECKING:
     from swarmshape.strategies import Strategy
@@ -53,7 +53,7 @@ class Params:
     limits: Limits = field(default_factory=Limits)
     wander_rate: float = 0.1
     """Chance per step that a resting wanderer tries a random step."""
-    patience: int = 10
+    patience: int = 3
     """Steps a mover waits behind a resting agent before it replans; twice that, it sidesteps."""
 
 
@@ -109,6 +109,7 @@ class Swarm:
         self._targets_per_group = np.array([len(g.targets) for g in world.groups])
         self.queue = MessageQueue()
         self.planner = FieldPlanner(world.size)
+        self._crossings = CrossingCounter(self.target_mask)
         self.step_count = 0
         self.overlap_total = 0
         self.overlaps = np.zeros(len(world.groups), dtype=np.int64)
@@ -251,7 +252,7 @@ class Swarm:
     def _preferences(self, movers: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each mover's preferred and second-best direction (0 for none)."""
         goals = self.world.targets[self.target[movers]]
-        first, second = straight_preferences(origin, goals, self.direction[movers])
+        first, second = straight_preferences(origin, goals, self.direction[movers], self._crossings)
         routed = self.routed[movers]
         if routed.any():
             first[routed] = self.planner.directions(
