@@ -16,6 +16,9 @@ from scipy.sparse import csgraph
 
 from swarmshape.motion import STEPS, inside
 
+WINDOW_MARGIN = 6
+"""Cells around an agent and its goal searched first for a path."""
+
 STRAIGHT_BONUS = 0.2
 LONG_AXIS_BONUS = 0.1
 """Tie-breaks among equally short steps: keep going straight (no stop to turn), else close the
@@ -60,55 +63,81 @@ def straight_preferences(
     dx, dy = (goal - origin).T
     along_x = np.where(dx > 0, 1, np.where(dx < 0, 2, 0))
     along_y = np.where(dy > 0, 3, np.where(dy < 0, 4, 0))
-    fewer, tie = crossings.x_first_crosses_less(origin, goal)
-    x_first = np.where(tie, np.abs(dx) >= np.abs(dy), fewer)
-    x_first = np.where((current == along_x) & (along_x > 0), True, x_first)
-    x_first = np.where((current == along_y) & (along_y > 0), False, x_first)
+    keep_x = (current == along_x) & (along_x > 0)
+    keep_y = (current == along_y) & (along_y > 0)
+    x_first = keep_x
+    turning = np.flatnonzero(~keep_x & ~keep_y & (along_x > 0) & (along_y > 0))
+    if len(turning):
+        fewer, tie = crossings.x_first_crosses_less(origin[turning], goal[turning])
+        longer = np.abs(dx[turning]) >= np.abs(dy[turning])
+        x_first[turning] = np.where(tie, longer, fewer)
     first = np.where(x_first, along_x, along_y)
     second = np.where(x_first, along_y, along_x)
     return np.where(first > 0, first, second), np.where(first > 0, second, 0)
 
 
 class FieldPlanner:
-    """Breadth-first distance fields over the arena, one per moving agent."""
+    """Breadth-first distance fields over the arena, one per agent that needs a path.
 
-    def __init__(self, size: tuple[int, int]) -> None:
+    Fields live as rows of one array (row 0 is all infinity: "no field"), so looking up the
+    neighbour distances of many agents is a single indexing operation.
+    """
+
+    def __init__(self, size: tuple[int, int], agents: int) -> None:
         self.size = size
         width, height = size
-        ids = np.arange(width * height).reshape(size)
-        self._edges = np.concatenate(
+        self._rows = np.full((4, width * height), np.inf)
+        self._row_of = np.zeros(agents, dtype=np.int64)
+        self._spare = list(range(1, len(self._rows)))
+
+    @staticmethod
+    def field(goal: np.ndarray, passable: np.ndarray) -> np.ndarray:
+        """Steps from every cell to `goal` through `passable` cells, shaped like `passable`."""
+        ids = np.arange(passable.size).reshape(passable.shape)
+        edges = np.concatenate(
             [
                 np.column_stack([ids[:-1].ravel(), ids[1:].ravel()]),
                 np.column_stack([ids[:, :-1].ravel(), ids[:, 1:].ravel()]),
             ]
         )
-        self._fields: dict[int, np.ndarray] = {}
-        self._no_field = np.full(width * height, np.inf)
-
-    def field(self, goal: np.ndarray, passable: np.ndarray) -> np.ndarray:
-        """Steps from every cell to `goal` moving through `passable` cells (inf if cut off)."""
         flat = passable.ravel()
-        keep = flat[self._edges[:, 0]] & flat[self._edges[:, 1]]
-        a, b = self._edges[keep].T
-        n = flat.size
-        graph = sparse.csr_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
-        start = goal[0] * self.size[1] + goal[1]
-        return csgraph.shortest_path(graph, directed=False, unweighted=True, indices=start)
+        a, b = edges[flat[edges[:, 0]] & flat[edges[:, 1]]].T
+        graph = sparse.csr_matrix((np.ones(len(a)), (a, b)), shape=(flat.size, flat.size))
+        start = ids[goal[0], goal[1]]
+        distance = csgraph.shortest_path(graph, directed=False, unweighted=True, indices=start)
+        return distance.reshape(passable.shape)
 
     def plan(self, agent: int, cell: np.ndarray, goal: np.ndarray, views: list[np.ndarray]) -> None:
-        """Cache a field for `agent`: the first passable view in which `goal` is reachable."""
-        for passable in views:
-            distance = self.field(goal, passable)
-            self._fields[agent] = distance
-            if np.isfinite(distance[cell[0] * self.size[1] + cell[1]]):
-                return
+        """Keep a field for `agent`: the first passable view in which `goal` is reachable.
 
-    def has_plan(self, agent: int) -> bool:
-        return agent in self._fields
+        Each view is searched first in a window around the agent and its goal, which is all
+        a detour around a small obstacle needs, and in the whole arena only if that fails.
+        """
+        if self._row_of[agent] == 0:
+            if not self._spare:
+                grown = len(self._rows)
+                self._rows = np.vstack([self._rows, np.full_like(self._rows, np.inf)])
+                self._spare = list(range(grown, len(self._rows)))
+            self._row_of[agent] = self._spare.pop()
+        row = self._rows[self._row_of[agent]].reshape(self.size)
+        low = np.maximum(np.minimum(cell, goal) - WINDOW_MARGIN, 0)
+        high = np.minimum(np.maximum(cell, goal) + WINDOW_MARGIN + 1, self.size)
+        window = (slice(low[0], high[0]), slice(low[1], high[1]))
+        for passable in views:
+            for part in (window, (slice(None), slice(None))):
+                offset = np.array([part[0].start or 0, part[1].start or 0])
+                row[...] = np.inf
+                row[part] = self.field(goal - offset, passable[part])
+                if np.isfinite(row[cell[0], cell[1]]):
+                    return
+
+    def planned(self, agents: np.ndarray) -> np.ndarray:
+        return self._row_of[agents] > 0
 
     def forget(self, agents: np.ndarray) -> None:
-        for agent in np.asarray(agents).tolist():
-            self._fields.pop(agent, None)
+        rows = self._row_of[agents]
+        self._spare.extend(np.unique(rows[rows > 0]).tolist())
+        self._row_of[agents] = 0
 
     def directions(
         self, agents: np.ndarray, cells: np.ndarray, goals: np.ndarray, current: np.ndarray
@@ -119,13 +148,12 @@ class FieldPlanner:
         """
         if len(agents) == 0:
             return np.zeros(0, dtype=np.int64)
-        fields = np.stack([self._fields.get(a, self._no_field) for a in agents.tolist()])
+        rows = self._row_of[agents][:, None]
         neighbours = cells[:, None, :] + STEPS[None, 1:, :]
         valid = inside(neighbours.reshape(-1, 2), self.size).reshape(-1, 4)
         flat = np.where(valid, neighbours[..., 0] * self.size[1] + neighbours[..., 1], 0)
-        rows = np.arange(len(agents))[:, None]
-        downhill = np.where(valid, fields[rows, flat], np.inf)
-        here = fields[np.arange(len(agents)), cells[:, 0] * self.size[1] + cells[:, 1]]
+        downhill = np.where(valid, self._rows[rows, flat], np.inf)
+        here = self._rows[rows[:, 0], cells[:, 0] * self.size[1] + cells[:, 1]]
         remaining = np.abs(goals - cells)
         long_axis = np.where(remaining[:, 0] >= remaining[:, 1], 0, 1)
         axis_of = np.array([0, 0, 1, 1])

@@ -13,6 +13,8 @@ from enum import IntEnum
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
 
 from swarmshape.messages import MessageQueue
 from swarmshape.motion import (
@@ -35,15 +37,15 @@ if TYPE_CHECKING:
     from swarmshape.world import World
 
 
-RING_SEARCH = 64
-"""Longest ring of movers waiting for each other that is detected and rotated."""
-
-
 class State(IntEnum):
     WAITING = 0
     MOVING = 1
     SETTLED = 2
     WANDERING = 3
+
+
+WAITING, MOVING, SETTLED, WANDERING = (int(state) for state in State)
+"""Plain ints for the hot loop: an IntEnum member lookup costs a microsecond each time."""
 
 
 @dataclass(frozen=True)
@@ -85,7 +87,7 @@ class Swarm:
         self.offset = np.zeros(n)
         self.speed = np.zeros(n)
         self.distance = np.zeros(n)
-        self.state = np.full(n, State.WAITING, dtype=np.int8)
+        self.state = np.full(n, WAITING, dtype=np.int8)
         self.target = np.full(n, -1, dtype=np.int64)
         self.blocked = np.zeros(n, dtype=np.int64)
         self.routed = np.zeros(n, dtype=bool)
@@ -108,7 +110,7 @@ class Swarm:
         """Per walled-grid key: the group whose target is there, or -1."""
         self._targets_per_group = np.array([len(g.targets) for g in world.groups])
         self.queue = MessageQueue()
-        self.planner = FieldPlanner(world.size)
+        self.planner = FieldPlanner(world.size, n)
         self._crossings = CrossingCounter(self.target_mask)
         self.step_count = 0
         self.overlap_total = 0
@@ -127,7 +129,7 @@ class Swarm:
 
     def assign(self, agents: np.ndarray, targets: np.ndarray) -> None:
         """Start `agents` moving to `targets` (indices into ``world.targets``)."""
-        self.state[agents] = State.MOVING
+        self.state[agents] = MOVING
         self.target[agents] = targets
         self.blocked[agents] = 0
         self.routed[agents] = not self.concurrent
@@ -135,12 +137,12 @@ class Swarm:
 
     def release(self, agents: np.ndarray) -> None:
         """Let `agents` wander: they have nothing left to do."""
-        self.state[agents] = State.WANDERING
+        self.state[agents] = WANDERING
         self.target[agents] = -1
         self.planner.forget(agents)
 
     def waiting(self, group: int) -> np.ndarray:
-        return np.flatnonzero((self.state == State.WAITING) & (self.group == group))
+        return np.flatnonzero((self.state == WAITING) & (self.group == group))
 
     # --- reading the run ------------------------------------------------------------------
 
@@ -181,7 +183,7 @@ class Swarm:
     def _reserve(self) -> None:
         """Every agent that wants a next cell claims it; free cells go to one claimant each."""
         patience = self.params.patience
-        moving = self.state == State.MOVING
+        moving = self.state == MOVING
         starters = np.flatnonzero(moving & (self.ahead == 0))
         # long-blocked movers sidestep, each with even odds per step, so two agents stuck on
         # each other do not dodge in lockstep
@@ -216,7 +218,7 @@ class Swarm:
         pushed = self._make_way(blocked, blocker)
 
         roaming = np.flatnonzero(
-            (self.state == State.WANDERING)
+            (self.state == WANDERING)
             & (self.ahead == 0)
             & (self.rng.random(len(self.state)) < self.params.wander_rate)
         )
@@ -273,12 +275,12 @@ class Swarm:
         is_agent = blocker >= 0
         state = self.state[agent]
         at_rest = self.ahead[agent] == 0
-        idle = is_agent & at_rest & ((state == State.WAITING) | (state == State.WANDERING))
+        idle = is_agent & at_rest & ((state == WAITING) | (state == WANDERING))
         if not self.concurrent:
             return blocker[idle]
         same_group = is_agent & (self.group[agent] == self.group[blocked])
-        settled = is_agent & (state == State.SETTLED)
-        waits_for_mover = same_group & at_rest & (state == State.MOVING)
+        settled = is_agent & (state == SETTLED)
+        waits_for_mover = same_group & at_rest & (state == MOVING)
         self._rotate_rings(blocked[waits_for_mover], agent[waits_for_mover])
         swap = settled & same_group
         self._swap_with_settled(blocked[swap], agent[swap])
@@ -294,16 +296,23 @@ class Swarm:
         """
         if len(waiting) < 2:
             return
-        next_of = np.full(len(self.state), -1)
-        next_of[waiting] = waited_for
-        walker = waiting.copy()
-        in_ring = np.zeros(len(waiting), dtype=bool)
-        for _ in range(min(len(waiting), RING_SEARCH)):
-            walker = np.where(walker >= 0, next_of[np.maximum(walker, 0)], -1)
-            in_ring |= walker == waiting
-        members = waiting[in_ring]
-        targets = self.target[members]
-        self.target[next_of[members]] = targets
+        is_waiting = np.zeros(len(self.state), dtype=bool)
+        is_waited_for = np.zeros(len(self.state), dtype=bool)
+        is_waiting[waiting] = True
+        is_waited_for[waited_for] = True
+        closing = is_waiting[waited_for] & is_waited_for[waiting]  # both ends could be in a ring
+        waiting, waited_for = waiting[closing], waited_for[closing]
+        if len(waiting) < 2:
+            return
+        nodes, pairs = np.unique(np.concatenate([waiting, waited_for]), return_inverse=True)
+        edges = sparse.csr_matrix(
+            (np.ones(len(waiting)), (pairs[: len(waiting)], pairs[len(waiting) :])),
+            shape=(len(nodes), len(nodes)),
+        )
+        _, ring = csgraph.connected_components(edges, directed=True, connection="strong")
+        in_ring = np.bincount(ring)[ring[pairs[: len(waiting)]]] > 1
+        members, successors = waiting[in_ring], waited_for[in_ring]
+        self.target[successors] = self.target[members]
         self.blocked[members] = 0
         self.planner.forget(members)
 
@@ -314,7 +323,7 @@ class Swarm:
         _, first = np.unique(settled, return_index=True)
         movers, settled = movers[first], settled[first]
         self.filled[self.target[settled]] = False
-        self.state[settled] = State.MOVING
+        self.state[settled] = MOVING
         self.target[movers], self.target[settled] = self.target[settled], self.target[movers].copy()
         both = np.concatenate([movers, settled])
         self.blocked[both] = 0
@@ -332,14 +341,14 @@ class Swarm:
         every agent if it can, else around resting ones, else around settled ones only.
         Concurrent movers go around nothing else: they swap with whoever is in their way.
         """
-        needing = [a for a in starters.tolist() if not self.planner.has_plan(a)]
+        needing = starters[~self.planner.planned(starters)].tolist()
         if not needing:
             return
         occupant = self.occupancy
         agent_here = occupant >= 0
         holder = np.maximum(occupant, 0)
-        settled = agent_here & (self.state[holder] == State.SETTLED)
-        resting = agent_here & (self.state[holder] != State.MOVING)
+        settled = agent_here & (self.state[holder] == SETTLED)
+        resting = agent_here & (self.state[holder] != MOVING)
         owner = self._owner.reshape(occupant.shape[0] + 2, -1)[1:-1, 1:-1]
         for group in np.unique(self.group[needing]).tolist():
             fixed = (occupant == SEED) | ((owner >= 0) & (owner != group))
@@ -386,10 +395,10 @@ class Swarm:
 
     def _settle(self) -> np.ndarray:
         """Moving agents resting on their own target settle there."""
-        candidates = np.flatnonzero((self.state == State.MOVING) & (self.ahead == 0))
+        candidates = np.flatnonzero((self.state == MOVING) & (self.ahead == 0))
         goals = self.world.targets[self.target[candidates]]
         done = candidates[(self.cell[candidates] == goals).all(axis=1)]
-        self.state[done] = State.SETTLED
+        self.state[done] = SETTLED
         self.filled[self.target[done]] = True
         self.planner.forget(done)
         return done
