@@ -6,6 +6,8 @@ Every function takes agent positions ``(n, 2)`` and target positions ``(m, 2)`` 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
@@ -15,6 +17,15 @@ from scipy.spatial.distance import cdist
 
 EXACT_LIMIT = 1500 * 1500
 """Largest agents x targets for exact Hungarian assignment (1,000 x 1,000 takes ~0.25 s)."""
+
+GREEDY_CANDIDATES = 8
+"""Nearest targets each agent considers per round in `greedy`."""
+
+GREEDY_LIMIT = 20_000
+GREEDY_LEAF = 1024
+"""`greedy` runs whole up to this many targets (~0.8 s), in parts of GREEDY_LEAF above."""
+
+Solver = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 LEAF = 128
 """Above the limit, space is bisected until a part has this many targets, then solved exactly:
@@ -29,22 +40,36 @@ def random_assignment(
 
 
 def greedy(agents: np.ndarray, targets: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Nearest free target: in rounds, every free target asks its nearest free agent, and each
-    agent takes the nearest target that asked. The closest free pair always matches, so every
-    round makes progress; ties fall to the lower index, so `rng` is not needed."""
+    """Nearest free target: agents, closest to the shape first, each take their nearest free
+    target. Above `GREEDY_LIMIT` targets, space is split as in `optimal` and each part is
+    solved greedily (rounds grow with the shape's depth, so one huge greedy pass is slow)."""
+    if len(targets) <= GREEDY_LIMIT:
+        return _greedy_rounds(agents, targets)
+    return _by_parts(agents, targets, GREEDY_LEAF, _greedy_rounds)
+
+
+def _greedy_rounds(agents: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """An agent whose few nearest targets went to others tries again in the next round,
+    against the targets still free. Ties fall to the lower index."""
     chosen = np.full(len(targets), -1)
-    free_agents = np.arange(len(agents))
-    free_targets = np.arange(len(targets))
-    while len(free_targets):
-        _, nearest = cKDTree(agents[free_agents]).query(targets[free_targets])
-        asked = free_agents[nearest]
-        distance = np.linalg.norm(agents[asked] - targets[free_targets], axis=1)
-        order = np.lexsort((free_targets, distance))
-        _, first = np.unique(asked[order], return_index=True)
-        winners = order[first]
-        chosen[free_targets[winners]] = asked[winners]
-        free_targets = np.delete(free_targets, winners)
-        free_agents = np.setdiff1d(free_agents, asked[winners], assume_unique=True)
+    reach, _ = cKDTree(targets).query(agents)
+    queue = np.argsort(reach, kind="stable")
+    free = np.arange(len(targets))
+    while len(free):
+        count = min(GREEDY_CANDIDATES, len(free))
+        _, options = cKDTree(targets[free]).query(agents[queue], k=count)
+        taken = np.zeros(len(free), dtype=bool)
+        later = []
+        for agent, nearest in zip(
+            queue.tolist(), options.reshape(len(queue), -1).tolist(), strict=True
+        ):
+            choice = next((option for option in nearest if not taken[option]), None)
+            if choice is None:
+                later.append(agent)
+                continue
+            taken[choice] = True
+            chosen[free[choice]] = agent
+        free, queue = free[~taken], np.array(later, dtype=np.int64)
     return chosen
 
 
@@ -52,18 +77,12 @@ def optimal(agents: np.ndarray, targets: np.ndarray, rng: np.random.Generator) -
     """Least total squared distance (CAPT: such paths do not cross in free space).
 
     Exact with the Hungarian method up to `EXACT_LIMIT`; above it, the agents nearest to the
-    shape are taken, one per target, and recursive bisection splits the targets at the median
-    of the longer axis, gives each half the agents that come first along that axis, and solves
-    parts of `LEAF` targets exactly.
+    shape are taken, one per target, space is bisected recursively, and parts of `LEAF`
+    targets are solved exactly.
     """
-    chosen = np.empty(len(targets), dtype=np.int64)
     if len(agents) * len(targets) <= EXACT_LIMIT:
-        chosen[:] = _hungarian(agents, targets)
-        return chosen
-    nearest, _ = cKDTree(targets).query(agents)
-    taken = np.argsort(nearest, kind="stable")[: len(targets)]
-    _bisect(agents, targets, taken, np.arange(len(targets)), chosen)
-    return chosen
+        return _hungarian(agents, targets)
+    return _by_parts(agents, targets, LEAF, _hungarian)
 
 
 def _hungarian(agents: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -71,19 +90,36 @@ def _hungarian(agents: np.ndarray, targets: np.ndarray) -> np.ndarray:
     return agent
 
 
+def _by_parts(agents: np.ndarray, targets: np.ndarray, leaf: int, solve: Solver) -> np.ndarray:
+    """Take the agents nearest the shape, one per target, then solve spatial parts apart."""
+    chosen = np.empty(len(targets), dtype=np.int64)
+    nearest, _ = cKDTree(targets).query(agents)
+    taken = np.argsort(nearest, kind="stable")[: len(targets)]
+    _bisect(agents, targets, taken, np.arange(len(targets)), chosen, leaf, solve)
+    return chosen
+
+
 def _bisect(
-    agents: np.ndarray, targets: np.ndarray, a: np.ndarray, t: np.ndarray, out: np.ndarray
+    agents: np.ndarray,
+    targets: np.ndarray,
+    a: np.ndarray,
+    t: np.ndarray,
+    out: np.ndarray,
+    leaf: int,
+    solve: Solver,
 ) -> None:
-    if len(t) <= LEAF:
-        out[t] = a[_hungarian(agents[a], targets[t])]
+    """Split the targets at the median of the longer axis and give each half the agents
+    that come first along that axis, until parts have `leaf` targets."""
+    if len(t) <= leaf:
+        out[t] = a[solve(agents[a], targets[t])]
         return
     spread = np.ptp(np.concatenate([agents[a], targets[t]]), axis=0)
     axis = int(np.argmax(spread))
     t = t[np.argsort(targets[t, axis], kind="stable")]
     a = a[np.argsort(agents[a, axis], kind="stable")]
     half = len(t) // 2
-    _bisect(agents, targets, a[:half], t[:half], out)
-    _bisect(agents, targets, a[half:], t[half:], out)
+    _bisect(agents, targets, a[:half], t[:half], out, leaf, solve)
+    _bisect(agents, targets, a[half:], t[half:], out, leaf, solve)
 
 
 def manhattan_lower_bounds(agents: np.ndarray, targets: np.ndarray) -> tuple[float, float, bool]:
