@@ -7,12 +7,12 @@ slightly darker once settled, pale while waiting or wandering.
 
 from __future__ import annotations
 
-from itertools import repeat
+from itertools import pairwise, repeat
 
 import numpy as np
 import pygame
 
-from swarmshape.swarm import State, Swarm
+from swarmshape.swarm import Swarm
 from swarmshape.world import World
 
 FLOOR = (250, 250, 247)
@@ -20,12 +20,12 @@ OUTSIDE = (222, 222, 216)
 TARGET = (196, 196, 196)
 SEED_GREEN = (34, 160, 60)
 
-SHADES = {
-    State.MOVING: lambda rgb: rgb,
-    State.SETTLED: lambda rgb: tuple(int(c * 0.62) for c in rgb),
-    State.WAITING: lambda rgb: tuple(int(c + (255 - c) * 0.55) for c in rgb),
-    State.WANDERING: lambda rgb: tuple(int(c + (255 - c) * 0.35) for c in rgb),
-}
+SHADES = (  # indexed by State
+    lambda rgb: tuple(int(c + (255 - c) * 0.55) for c in rgb),  # waiting: pale
+    lambda rgb: rgb,  # moving: the group's colour
+    lambda rgb: tuple(int(c * 0.62) for c in rgb),  # settled: darker
+    lambda rgb: tuple(int(c + (255 - c) * 0.35) for c in rgb),  # wandering: light
+)
 
 
 class Renderer:
@@ -52,18 +52,23 @@ class Renderer:
         return pygame.Rect(ox + cell_xy[0] * size, oy + cell_xy[1] * size, size, size)
 
     def draw(self, surface: pygame.Surface, swarm: Swarm, area: pygame.Rect | None = None) -> None:
+        """Draw the world into `area` (default: all of `surface`), scaled to fit."""
         area = area or surface.get_rect()
         cell, origin = self.fit(area)
-        surface.fill(OUTSIDE, area)
-        surface.blit(self._background_at(cell), origin)
+        background = self._background_at(cell)
+        world_rect = surface.blit(background, origin)
+        for margin in _margins(area, world_rect):
+            surface.fill(OUTSIDE, margin)
         gap = 1 if cell >= 4 else 0
         corner = np.floor((swarm.positions() - 0.5) * cell + np.array(origin) + gap).astype(int)
-        for group, placed in enumerate(self.world.groups):
-            for state, shade in SHADES.items():
-                chosen = (swarm.group == group) & (swarm.state == state)
-                if chosen.any():
-                    square = self._square(cell - 2 * gap, shade(placed.colour))
-                    surface.fblits(zip(repeat(square), map(tuple, corner[chosen].tolist())))
+        kind = swarm.group * len(SHADES) + swarm.state
+        order = np.argsort(kind, kind="stable")
+        bounds = np.searchsorted(kind[order], np.arange(len(self.world.groups) * len(SHADES) + 1))
+        corners = corner[order].tolist()
+        for index, (start, stop) in enumerate(pairwise(bounds)):
+            if start < stop:  # one blit call per colour draws all its squares
+                square = self._square(cell - 2 * gap, index)
+                surface.fblits(zip(repeat(square), corners[start:stop]))
 
     def _background_at(self, cell: int) -> pygame.Surface:
         width, height = self.world.size
@@ -80,10 +85,22 @@ class Renderer:
         self._background = background
         return background
 
-    def _square(self, side: int, colour: tuple[int, int, int]) -> pygame.Surface:
-        key = (side, *colour)
+    def _square(self, side: int, index: int) -> pygame.Surface:
+        """A filled square for group ``index // 4`` in state ``index % 4``, made once."""
+        key = (side, index)
         if key not in self._squares:
+            group, state = divmod(index, len(SHADES))
             square = pygame.Surface((max(1, side), max(1, side)))
-            square.fill(colour)
+            square.fill(SHADES[state](self.world.groups[group].colour))
             self._squares[key] = square
         return self._squares[key]
+
+
+def _margins(area: pygame.Rect, inner: pygame.Rect) -> list[pygame.Rect]:
+    """The parts of `area` around `inner`: top, bottom, left, right."""
+    return [
+        pygame.Rect(area.left, area.top, area.width, inner.top - area.top),
+        pygame.Rect(area.left, inner.bottom, area.width, area.bottom - inner.bottom),
+        pygame.Rect(area.left, inner.top, inner.left - area.left, inner.height),
+        pygame.Rect(inner.right, inner.top, area.right - inner.right, inner.height),
+    ]
