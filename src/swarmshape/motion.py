@@ -76,28 +76,6 @@ def inside(cells: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     return (cells >= 0).all(axis=1) & (cells < np.array(size)).all(axis=1)
 
 
-def overlap_candidates(pos: np.ndarray) -> np.ndarray:
-    """Indices of squares that share a grid cell with another square's footprint.
-
-    Squares that overlap must share a cell, so this cheap test (every square marks the up to
-    four cells it covers) finds every overlap; `overlapping_pairs` then checks the few suspects.
-    """
-    if len(pos) < 2:
-        return np.zeros(0, dtype=np.int64)
-    low = np.floor(pos - 0.5 + (1.0 - TOUCH)).astype(np.int64)
-    high = np.floor(pos + 0.5 - (1.0 - TOUCH)).astype(np.int64)
-    corner = low.min()  # a scalar: much cheaper than a per-axis minimum
-    low, high = low - corner, high - corner
-    wide, tall = high[:, 0] > low[:, 0], high[:, 1] > low[:, 1]
-    xs = np.concatenate([low[:, 0], high[:, 0][wide], low[:, 0][tall], high[:, 0][wide & tall]])
-    ys = np.concatenate([low[:, 1], low[:, 1][wide], high[:, 1][tall], high[:, 1][wide & tall]])
-    index = np.arange(len(pos))
-    owners = np.concatenate([index, index[wide], index[tall], index[wide & tall]])
-    cells = xs * (int(high[:, 1].max()) + 1) + ys
-    shared = np.bincount(cells)[cells] > 1
-    return np.unique(owners[shared])
-
-
 def overlapping_pairs(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs ``(i, j)``, ``i != j``, of unit squares that overlap, without O(n^2) work.
 

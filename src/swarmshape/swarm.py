@@ -13,8 +13,6 @@ from enum import IntEnum
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
 
 from swarmshape.messages import MessageQueue
 from swarmshape.motion import (
@@ -25,7 +23,6 @@ from swarmshape.motion import (
     WALL,
     Limits,
     advance,
-    overlap_candidates,
     overlapping_pairs,
     positions,
     resolve_claims,
@@ -118,6 +115,8 @@ class Swarm:
         """Overlapping pairs summed over steps, per group (a pair counts for both its groups)."""
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
+        self._seed_keys = self._key(world.seeds)
+        self._seed_ids = n + np.arange(len(world.seeds))
         self.completed_at: list[int | None] = [None] * len(world.groups)
         self.strategy.start(self)
 
@@ -296,22 +295,19 @@ class Swarm:
         """
         if len(waiting) < 2:
             return
-        is_waiting = np.zeros(len(self.state), dtype=bool)
-        is_waited_for = np.zeros(len(self.state), dtype=bool)
-        is_waiting[waiting] = True
-        is_waited_for[waited_for] = True
-        closing = is_waiting[waited_for] & is_waited_for[waiting]  # both ends could be in a ring
-        waiting, waited_for = waiting[closing], waited_for[closing]
-        if len(waiting) < 2:
+        # Follow "waits for" links by pointer doubling: after more jumps than there are
+        # waiting agents every walk has either run out (-1) or is going round a ring, and
+        # the places the walks reach are exactly the ring members.
+        next_of = np.full(len(self.state) + 1, -1)  # the extra last slot keeps -1 at -1
+        next_of[waiting] = waited_for
+        jump = next_of.copy()
+        for _ in range(len(waiting).bit_length()):
+            jump = jump[jump]
+        reached = jump[waiting]
+        members = np.unique(reached[reached >= 0])
+        if len(members) == 0:
             return
-        nodes, pairs = np.unique(np.concatenate([waiting, waited_for]), return_inverse=True)
-        edges = sparse.csr_matrix(
-            (np.ones(len(waiting)), (pairs[: len(waiting)], pairs[len(waiting) :])),
-            shape=(len(nodes), len(nodes)),
-        )
-        _, ring = csgraph.connected_components(edges, directed=True, connection="strong")
-        in_ring = np.bincount(ring)[ring[pairs[: len(waiting)]]] > 1
-        members, successors = waiting[in_ring], waited_for[in_ring]
+        successors = next_of[members]
         self.target[successors] = self.target[members]
         self.blocked[members] = 0
         self.planner.forget(members)
@@ -403,11 +399,25 @@ class Swarm:
         self.planner.forget(done)
         return done
 
+    def _overlap_suspects(self) -> np.ndarray:
+        """Agents (then seeds, numbered after them) whose square shares a cell with another's.
+
+        A square covers its cell, and the next one too while it is between the two; squares
+        that overlap share a cell, so only these few need the exact test. Derived from the
+        positions alone, never from the reservations, so it checks them.
+        """
+        between = np.flatnonzero(self.offset > 0)
+        ahead = self.cell[between] + STEPS[self.direction[between]]
+        keys = np.concatenate([self._key(self.cell), self._key(ahead), self._seed_keys])
+        owners = np.concatenate([np.arange(len(self.cell)), between, self._seed_ids])
+        shared = np.bincount(keys, minlength=len(self._occupancy))[keys] > 1
+        return np.unique(owners[shared])
+
     def _observe(self) -> None:
         """Count overlapping pairs (seeds included); note completed groups, free their spares."""
-        everything = np.concatenate([self.positions(), self.world.seeds + 0.5])
-        suspects = overlap_candidates(everything)
+        suspects = self._overlap_suspects()
         if len(suspects):
+            everything = np.concatenate([self.positions(), self.world.seeds + 0.5])
             owner = np.concatenate([self.group, self._seed_group])[suspects]
             i, j = overlapping_pairs(everything[suspects])
             self.overlap_total += len(i)
