@@ -25,8 +25,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 800))
-    args = parser.parse_args()
-    run = prepare(build_parser().parse_args(["run", str(args.path), "--seed", str(args.seed)]))
+    args, run_options = parser.parse_known_args()
+    command = ["run", str(args.path), "--seed", str(args.seed), *run_options]
+    run = prepare(build_parser().parse_args(command))
     viewer = Viewer(run.new_swarm, title=run.scenario.name, size=tuple(args.size), speed=1, fps=0)
     while viewer.swarm.step_count < args.steps:
         viewer.swarm.step()
