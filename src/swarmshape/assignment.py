@@ -26,6 +26,8 @@ GREEDY_LEAF = 1024
 """`greedy` runs whole up to this many targets (~0.8 s), in parts of GREEDY_LEAF above."""
 
 Solver = Callable[[np.ndarray, np.ndarray], np.ndarray]
+Matcher = Callable[[np.ndarray, np.ndarray, np.random.Generator], np.ndarray]
+"""(agents, targets, rng) -> for each target, the index of its agent."""
 
 LEAF = 128
 """Above the limit, space is bisected until a part has this many targets, then solved exactly:

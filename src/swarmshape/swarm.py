@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from swarmshape.assignment import Matcher, greedy
 from swarmshape.messages import MessageQueue
 from swarmshape.motion import (
     FREE,
@@ -28,8 +29,10 @@ from swarmshape.motion import (
     resolve_claims,
 )
 from swarmshape.navigation import CrossingCounter, FieldPlanner, straight_preferences
+from swarmshape.world import WorldError
 
 if TYPE_CHECKING:
+    from swarmshape.shape import Pose, Shape
     from swarmshape.strategies import Strategy
     from swarmshape.world import World
 
@@ -54,6 +57,13 @@ class Params:
     """Chance per step that a resting wanderer tries a random step."""
     patience: int = 3
     """Steps a mover waits behind a resting agent before it replans; twice that, it sidesteps."""
+
+
+def _renumbering(old: np.ndarray, new: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """For each old target, the index of the new target on the same cell, or -1."""
+    index = np.full(size, -1)
+    index[new[:, 0], new[:, 1]] = np.arange(len(new))
+    return index[old[:, 0], old[:, 1]]
 
 
 class Swarm:
@@ -89,6 +99,8 @@ class Swarm:
         self.blocked = np.zeros(n, dtype=np.int64)
         self.routed = np.zeros(n, dtype=bool)
         """Agents that follow a planned path instead of steering straight."""
+        self.recruited = np.zeros(n, dtype=bool)
+        """Agents sent to a changed shape's new cells (they spare settled agents if they can)."""
         width, height = world.size
         self._stride = height + 2
         self._neighbour = np.array([0, self._stride, -self._stride, 1, -1])
@@ -97,28 +109,92 @@ class Swarm:
         """Per cell ``[x, y]``: the agent holding it, FREE or SEED (a view of a walled grid)."""
         self._occupancy = padded.reshape(-1)
         self.occupancy[...] = FREE
-        self.occupancy[world.seeds[:, 0], world.seeds[:, 1]] = SEED
         self.occupancy[self.cell[:, 0], self.cell[:, 1]] = np.arange(n)
         self.filled = np.zeros(len(world.targets), dtype=bool)
+        self.queue = MessageQueue()
+        self.planner = FieldPlanner(world.size, n)
+        self.step_count = 0
+        self.overlap_total = 0
+        self.overlaps = np.zeros(len(world.groups), dtype=np.int64)
+        """Overlapping pairs summed over steps, per group (a pair counts for both its groups)."""
+        self._index_world()
+        self.completed_at: list[int | None] = [None] * len(world.groups)
+        self.strategy.start(self)
+
+    def _index_world(self) -> None:
+        """Everything derived from the world's targets and seeds (again after a reshape)."""
+        world = self.world
+        self.occupancy[world.seeds[:, 0], world.seeds[:, 1]] = SEED
         self.target_mask = world.mask(world.targets)
         owner = np.full(world.size, -1)
         owner[world.targets[:, 0], world.targets[:, 1]] = world.target_group
         self._owner = np.pad(owner, 1, constant_values=-1).reshape(-1)
         """Per walled-grid key: the group whose target is there, or -1."""
         self._targets_per_group = np.array([len(g.targets) for g in world.groups])
-        self.queue = MessageQueue()
-        self.planner = FieldPlanner(world.size, n)
         self._crossings = CrossingCounter(self.target_mask)
-        self.step_count = 0
-        self.overlap_total = 0
-        self.overlaps = np.zeros(len(world.groups), dtype=np.int64)
-        """Overlapping pairs summed over steps, per group (a pair counts for both its groups)."""
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
         self._seed_keys = self._key(world.seeds)
-        self._seed_ids = n + np.arange(len(world.seeds))
-        self.completed_at: list[int | None] = [None] * len(world.groups)
-        self.strategy.start(self)
+        self._seed_ids = len(self.cell) + np.arange(len(world.seeds))
+
+    def reshape(self, group: int, shape: Shape, pose: Pose | None = None) -> None:
+        """Form a new shape for `group` without a restart (the live editor's hand-over).
+
+        Agents on cells that stay in the shape keep them and do not move; agents whose cells
+        or targets went away wander; the strategy then hands out the open cells.
+        """
+        old = self.world
+        new = old.reshaped(group, shape, pose or old.groups[group].pose)
+        seeds = new.mask(new.seeds) & ~old.mask(old.seeds)
+        if (self.occupancy[seeds] >= 0).any():
+            raise WorldError("the seeds' new cells are taken by robots; move them elsewhere")
+        renumber = _renumbering(old.targets, new.targets, new.size)
+        has_target = self.target >= 0
+        self.target[has_target] = renumber[self.target[has_target]]
+        lost = has_target & (self.target < 0)
+        self.release(np.flatnonzero(lost))
+        self.filled = np.zeros(len(new.targets), dtype=bool)
+        self.filled[self.target[self.state == SETTLED]] = True
+        self.occupancy[old.mask(old.seeds)] = FREE
+        self.world = new
+        self._index_world()
+        self.completed_at[group] = None
+        self.planner.forget(np.arange(len(self.cell)))
+        hand_out = getattr(self.strategy, "on_reshape", None)
+        if hand_out is None:
+            self.recruit(group)
+        else:
+            hand_out(self, group)
+
+    def recruit(self, group: int, match: Matcher = greedy) -> None:
+        """Match idle agents of `group` to its open targets and send them there.
+
+        Recruits plan paths around settled agents when they can, so agents that already hold
+        their cells stay put; only a cell walled in by settled agents makes them swap.
+        """
+        targets, agents = self.open_targets(group), self.idle(group)
+        if len(targets) == 0 or len(agents) == 0:
+            return
+        goals, cells = self.world.targets[targets].astype(float), self.cell[agents].astype(float)
+        if len(agents) >= len(targets):
+            self.assign(agents[match(cells, goals, self.rng)], targets)
+        else:  # too few agents: each agent takes a target, the rest stay open
+            self.assign(agents, targets[match(goals, cells, self.rng)])
+        self.routed[agents] = True
+        self.recruited[agents] = True
+
+    def open_targets(self, group: int) -> np.ndarray:
+        """Targets of `group` that nobody is settled on or heading for."""
+        taken = np.zeros(len(self.filled), dtype=bool)
+        taken[self.target[self.target >= 0]] = True
+        return np.flatnonzero((self.world.target_group == group) & ~taken)
+
+    def idle(self, group: int) -> np.ndarray:
+        """Agents of `group` without a task: waiting first, then wandering."""
+        mine = self.group == group
+        return np.concatenate(
+            [np.flatnonzero(mine & (self.state == state)) for state in (WAITING, WANDERING)]
+        )
 
     # --- what strategies call -------------------------------------------------------------
 
@@ -132,6 +208,7 @@ class Swarm:
         self.target[agents] = targets
         self.blocked[agents] = 0
         self.routed[agents] = not self.concurrent
+        self.recruited[agents] = False
         self.planner.forget(agents)
 
     def release(self, agents: np.ndarray) -> None:
@@ -335,7 +412,8 @@ class Swarm:
 
         Nobody enters a seed or another group's shape. One at a time, a mover also goes around
         every agent if it can, else around resting ones, else around settled ones only.
-        Concurrent movers go around nothing else: they swap with whoever is in their way.
+        Concurrent movers swap their way through settled agents; recruits of a changed shape
+        first try to go around them, so that agents on kept cells stay put.
         """
         needing = starters[~self.planner.planned(starters)].tolist()
         if not needing:
@@ -348,11 +426,11 @@ class Swarm:
         owner = self._owner.reshape(occupant.shape[0] + 2, -1)[1:-1, 1:-1]
         for group in np.unique(self.group[needing]).tolist():
             fixed = (occupant == SEED) | ((owner >= 0) & (owner != group))
-            if self.concurrent:
-                views = [~fixed]
-            else:
+            if not self.concurrent:
                 views = [~fixed & ~agent_here, ~fixed & ~resting, ~fixed & ~settled]
             for agent in [a for a in needing if self.group[a] == group]:
+                if self.concurrent:
+                    views = [~fixed & ~settled, ~fixed] if self.recruited[agent] else [~fixed]
                 cell = self.cell[agent]
                 own = [view.copy() for view in views]
                 for view in own:

@@ -75,6 +75,25 @@ class World:
     def agents(self) -> int:
         return sum(g.agents for g in self.groups)
 
+    def reshaped(self, group: int, shape: Shape, pose: Pose) -> World:
+        """The same arena with one group's shape (and seed pose) replaced; checked as new."""
+        old = self.groups[group]
+        placed = Group(
+            old.name,
+            old.colour,
+            shape,
+            pose,
+            old.agents,
+            shape.cells,
+            pose.to_world(shape.cells),
+            pose.to_world(SEED_CELLS),
+        )
+        groups = list(self.groups)
+        groups[group] = placed
+        world = World(self.size, tuple(groups))
+        _validate(world, starts=False)
+        return world
+
     def mask(self, cells: np.ndarray) -> np.ndarray:
         """A ``(width, height)`` boolean grid, True at `cells`."""
         grid = np.zeros(self.size, dtype=bool)
@@ -163,7 +182,7 @@ def _auto_arena(groups: list[Group]) -> tuple[list[Group], tuple[int, int]]:
     return moved, (int(width), int(height))
 
 
-def _validate(world: World) -> None:
+def _validate(world: World, *, starts: bool = True) -> None:
     width, height = world.size
     if width < 1 or height < 1:
         raise WorldError(f"arena must be at least 1x1 cells, got {width}x{height}")
@@ -176,7 +195,7 @@ def _validate(world: World) -> None:
     everything = np.concatenate([world.targets, world.seeds])
     if len(np.unique(everything, axis=0)) < len(everything):
         raise WorldError("groups overlap: two shapes or seed sets share a cell; move a seed pose")
-    if len(world.start_cells()) < world.agents:
+    if starts and len(world.start_cells()) < world.agents:
         raise WorldError(
             f"arena {width}x{height} has no room to start {world.agents} agents; enlarge the arena"
         )

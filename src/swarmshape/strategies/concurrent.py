@@ -6,18 +6,16 @@ moves everyone concurrently and passes walled-in targets inward by swapping.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from swarmshape import assignment
+from swarmshape.assignment import Matcher
 from swarmshape.strategies import register
 
 if TYPE_CHECKING:
     from swarmshape.swarm import Swarm
-
-Matcher = Callable[[np.ndarray, np.ndarray, np.random.Generator], np.ndarray]
 
 
 class OneShot:
@@ -39,6 +37,10 @@ class OneShot:
 
     def on_settled(self, swarm: Swarm, agents: np.ndarray) -> None:
         """Nothing to hand on: every target was assigned at the start."""
+
+    def on_reshape(self, swarm: Swarm, group: int) -> None:
+        """The shape changed: match the idle agents to the open cells the same way."""
+        swarm.recruit(group, type(self).match)
 
 
 @register

@@ -14,6 +14,7 @@ import numpy as np
 from swarmshape.fill_order import fill_sequence
 from swarmshape.messages import SEEDS
 from swarmshape.strategies import register
+from swarmshape.swarm import MOVING, WANDERING
 
 if TYPE_CHECKING:
     from swarmshape.swarm import Swarm
@@ -31,25 +32,43 @@ class Paper:
         self._next: list[int] = []
 
     def start(self, swarm: Swarm) -> None:
+        self._order_open_targets(swarm)
+        for g in range(len(swarm.world.groups)):
+            self._hand_on(swarm, g, SEEDS)
+
+    def on_reshape(self, swarm: Swarm, group: int) -> None:
+        """Order the open cells anew; the seeds restart the chain if nobody is moving."""
+        self._order_open_targets(swarm)
+        moving = (swarm.group == group) & (swarm.state == MOVING)
+        if not moving.any():
+            self._hand_on(swarm, group, SEEDS)
+
+    def _order_open_targets(self, swarm: Swarm) -> None:
+        """Each group's fill order, as target indices, without the cells already taken."""
         world = swarm.world
         first = np.cumsum([0] + [len(g.targets) for g in world.groups])
-        self._sequence = [
-            first[g] + fill_sequence(world, g, self.order, swarm.rng)
-            for g in range(len(world.groups))
-        ]
-        self._next = [0] * len(world.groups)
+        taken = np.zeros(len(world.targets), dtype=bool)
+        taken[swarm.target[swarm.target >= 0]] = True
+        self._sequence = []
         for g in range(len(world.groups)):
-            self._hand_on(swarm, g, SEEDS)
+            sequence = first[g] + fill_sequence(world, g, self.order, swarm.rng)
+            self._sequence.append(sequence[~taken[sequence]])
+        self._next = [0] * len(world.groups)
 
     def on_settled(self, swarm: Swarm, agents: np.ndarray) -> None:
         for agent in agents.tolist():
             self._hand_on(swarm, int(swarm.group[agent]), agent)
 
     def _hand_on(self, swarm: Swarm, group: int, sender: int) -> None:
-        """Send the group's next target to a random waiting robot, while targets remain."""
-        waiting = swarm.waiting(group)
-        if self._next[group] == len(self._sequence[group]) or len(waiting) == 0:
+        """Send the group's next target to a random waiting robot, while targets remain.
+
+        Once a shape was complete its spare robots wander; a changed shape recruits them.
+        """
+        idle = swarm.waiting(group)
+        if len(idle) == 0:
+            idle = np.flatnonzero((swarm.group == group) & (swarm.state == WANDERING))
+        if self._next[group] == len(self._sequence[group]) or len(idle) == 0:
             return
-        recipient = int(swarm.rng.choice(waiting))
+        recipient = int(swarm.rng.choice(idle))
         swarm.send(sender, recipient, int(self._sequence[group][self._next[group]]))
         self._next[group] += 1
