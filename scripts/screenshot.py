@@ -28,7 +28,9 @@ def main() -> None:
     args, run_options = parser.parse_known_args()
     command = ["run", str(args.path), "--seed", str(args.seed), *run_options]
     run = prepare(build_parser().parse_args(command))
-    viewer = Viewer(run.new_swarm, title=run.scenario.name, size=tuple(args.size), speed=1, fps=0)
+    viewer = Viewer(
+        run.make_swarm, run.world, title=run.name, size=tuple(args.size), speed=1, fps=0
+    )
     while viewer.swarm.step_count < args.steps:
         viewer.swarm.step()
     viewer.paused = True

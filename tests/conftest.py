@@ -15,7 +15,7 @@ import pytest
 from swarmshape.shape import Shape
 from swarmshape.strategies import create
 from swarmshape.swarm import Swarm
-from swarmshape.world import GroupSpec, build_world
+from swarmshape.world import GroupSpec, World, build_world
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 
@@ -30,6 +30,10 @@ def grid_from(text: str) -> np.ndarray:
     return np.array([[c == "#" for c in row] for row in text.split()], dtype=bool)
 
 
+def world_of(grid: np.ndarray, agents: int | None = None) -> World:
+    return build_world([GroupSpec("test", Shape(grid), (200, 60, 60), agents)])
+
+
 def make_swarm(
     grid: np.ndarray,
     *,
@@ -38,5 +42,4 @@ def make_swarm(
     order: str = "outward",
     strategy: str = "paper",
 ) -> Swarm:
-    world = build_world([GroupSpec("test", Shape(grid), (200, 60, 60), agents)])
-    return Swarm(world, create(strategy, order=order), seed)
+    return Swarm(world_of(grid, agents), create(strategy, order=order), seed)

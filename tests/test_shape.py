@@ -67,3 +67,17 @@ def test_groups_may_not_overlap():
     specs = [GroupSpec(n, Shape(L_SHAPE), (1, 2, 3), pose=Pose(5, 5)) for n in "ab"]
     with pytest.raises(WorldError, match="overlap"):
         build_world(specs, (30, 30))
+
+
+def test_to_frame_undoes_to_world_for_every_rotation():
+    cells = np.array([[0, 0], [3, -2], [-1, 5]])
+    for rotation in (0, 90, 180, 270):
+        pose = Pose(7, -3, rotation)
+        assert pose.to_frame(pose.to_world(cells)).tolist() == cells.tolist()
+
+
+def test_a_shape_from_cells_keeps_where_they_are():
+    cells = np.array([[-2, 1], [-1, 1], [0, 3]])
+    shape = Shape.from_cells(cells)
+    assert shape.origin == (-2, 1) and shape.grid.shape == (3, 3)
+    assert sorted(shape.cells.tolist()) == sorted(cells.tolist())

@@ -3,8 +3,10 @@ from __future__ import annotations
 import pygame
 import pytest
 
+from swarmshape.strategies import create
+from swarmshape.swarm import Swarm
 from swarmshape.viewer import SPEEDS, Viewer
-from tests.conftest import grid_from, make_swarm
+from tests.conftest import grid_from, make_swarm, world_of
 
 SHAPE = grid_from("""
 ####
@@ -14,7 +16,8 @@ SHAPE = grid_from("""
 @pytest.fixture
 def viewer(tmp_path):
     view = Viewer(
-        lambda: make_swarm(SHAPE, seed=3),
+        lambda world: Swarm(world, create("paper"), 3),
+        world_of(SHAPE),
         title="bar.png",
         size=(640, 400),
         fps=0,

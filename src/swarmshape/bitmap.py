@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, UnidentifiedImageError
+from PIL import Image, PngImagePlugin, UnidentifiedImageError
 
 from swarmshape.errors import InputError
 from swarmshape.files import atomic_write
@@ -19,6 +19,8 @@ DEFAULT_CELLS = 32
 """Long side of the grid, in cells, when the image is larger: ~300-700 cells for a silhouette."""
 
 DEFAULT_THRESHOLD = 0.5
+
+EDITOR_TAG = "swarmshape-one-cell-per-pixel"
 
 DARK_BORDER = 0.9
 """Share of dark border pixels that means "dark background" (a shape may touch the border)."""
@@ -48,7 +50,10 @@ def load_grid(
         raise BitmapError(f"--cells must be at least 1, got {cells}")
     if not 0.0 < threshold < 1.0:
         raise BitmapError(f"--threshold must be between 0 and 1, got {threshold}")
-    ink = ink_fraction(_open_rgba(path), threshold=threshold, invert=invert)
+    rgba, one_cell_per_pixel = _open_rgba(path)
+    if one_cell_per_pixel:
+        cells = max(cells, *rgba.shape[:2])
+    ink = ink_fraction(rgba, threshold=threshold, invert=invert)
     if not ink.any():
         raise BitmapError(f"{path}: no shape found (the image has no ink; try --invert)")
     grid = crop(resample(_bounding_box(ink), cells))
@@ -57,7 +62,8 @@ def load_grid(
     return grid
 
 
-def _open_rgba(path: Path) -> np.ndarray:
+def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
+    """Pixels as RGBA floats, and whether the editor wrote the file (one cell per pixel)."""
     if not path.exists():
         raise BitmapError(f"{path}: no such file")
     if path.is_dir():
@@ -65,7 +71,8 @@ def _open_rgba(path: Path) -> np.ndarray:
     try:
         with Image.open(path) as image:
             image.seek(0)  # first frame of an animation
-            return np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+            rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+            return rgba, image.info.get(EDITOR_TAG) == "1"
     except UnidentifiedImageError:
         raise BitmapError(f"{path}: not an image Pillow can read") from None
     except Image.DecompressionBombError:
@@ -116,7 +123,12 @@ def resample(fraction: np.ndarray, long_side: int) -> np.ndarray:
 
 
 def save_grid(grid: np.ndarray, path: str | os.PathLike[str]) -> None:
-    """Write black ink on white as a 1-bit PNG, atomically, so `load_grid` reads it back exactly."""
-    path = Path(path)
+    """Write black ink on white as a 1-bit PNG, atomically, so `load_grid` reads it back exactly.
+
+    The PNG carries a text chunk saying it has one cell per pixel, so it is never shrunk to
+    ``--cells`` when it is loaded again, however large it was painted.
+    """
     image = Image.fromarray(np.where(grid, 0, 255).astype(np.uint8)).convert("1")
-    atomic_write(path, lambda tmp: image.save(tmp, format="PNG"))
+    info = PngImagePlugin.PngInfo()
+    info.add_text(EDITOR_TAG, "1")
+    atomic_write(path, lambda tmp: image.save(tmp, format="PNG", pnginfo=info))

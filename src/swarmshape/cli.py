@@ -24,14 +24,17 @@ from swarmshape.files import write_text
 from swarmshape.fill_order import ORDERS
 from swarmshape.metrics import run_metrics, summary_line
 from swarmshape.motion import Limits
-from swarmshape.scenario import ImageOptions, Scenario, load_scenario
+from swarmshape.scenario import PALETTE, ImageOptions, Scenario, load_scenario, parse_colour
+from swarmshape.shape import Pose
 from swarmshape.swarm import Params, Swarm
-from swarmshape.world import build_world
+from swarmshape.world import World, blank_world, build_world
 
 DEFAULT_SHAPE = "horseshoe.png"
 DEFAULT_STRATEGY = "optimal"
 DEFAULT_MAX_STEPS = 500_000
-COMMANDS = ("run", "strategies")
+COMMANDS = ("run", "edit", "strategies")
+BLANK_ARENA = (48, 30)
+BLANK_POSE = Pose(4, 4)
 
 
 def bundled_shapes() -> Path:
@@ -46,12 +49,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="swarmshape",
         description="Watch a swarm of square robots organise itself into a shape.",
-        epilog="Commands: run (the default) and strategies. See 'swarmshape run --help'.",
+        epilog="Commands: run (the default), edit and strategies. See 'swarmshape run --help'.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     commands = parser.add_subparsers(dest="command")
+    shared = _shared_options()
     run = commands.add_parser(
         "run",
+        parents=[shared],
         help="form a shape (the default command)",
         description="Form the shape of an image or a .toml scenario, in a window or headless.",
     )
@@ -62,17 +67,43 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"an image (PNG, GIF, BMP, JPEG, WebP) or a .toml scenario "
         f"(default: the bundled {DEFAULT_SHAPE})",
     )
-    run.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
-    run.add_argument("--agents", type=int, help="number of agents (default: one per cell)")
-    run.add_argument(
+    out = run.add_argument_group("output")
+    out.add_argument("--headless", action="store_true", help="no window: run, print a summary")
+    out.add_argument(
+        "--max-steps", type=int, help=f"stop after this many steps (default {DEFAULT_MAX_STEPS})"
+    )
+    out.add_argument("--metrics", type=Path, help="write the run's metrics as JSON to this file")
+    edit = commands.add_parser(
+        "edit",
+        parents=[shared],
+        help="paint a shape, then watch the swarm form it",
+        description="Paint a shape on the arena with the mouse (h shows the keys); Enter hands "
+        "it to a swarm, which you can keep re-shaping with e.",
+    )
+    edit.add_argument(
+        "path",
+        nargs="?",
+        type=Path,
+        help="the image to edit; a new file starts blank and is where Ctrl+S saves",
+    )
+    commands.add_parser("strategies", help="list the available strategies")
+    return parser
+
+
+def _shared_options() -> argparse.ArgumentParser:
+    """Options of both run and edit."""
+    shared = argparse.ArgumentParser(add_help=False)
+    shared.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
+    shared.add_argument("--agents", type=int, help="number of agents (default: one per cell)")
+    shared.add_argument(
         "--strategy",
         help=f"who goes where: a name from 'swarmshape strategies' or package.module:Class "
         f"(default {DEFAULT_STRATEGY})",
     )
-    run.add_argument(
+    shared.add_argument(
         "--order", choices=ORDERS, help="the paper strategy's fill order (default outward)"
     )
-    image = run.add_argument_group("image loading")
+    image = shared.add_argument_group("image loading")
     image.add_argument(
         "--cells",
         type=int,
@@ -86,19 +117,12 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"luminance 0..1 between ink and background (default {DEFAULT_THRESHOLD})",
     )
     image.add_argument("--invert", action="store_true", help="the ink is the light part")
-    sim = run.add_argument_group("simulation")
+    sim = shared.add_argument_group("simulation")
     sim.add_argument("--arena", type=_size, help="arena size in cells as WxH (default: automatic)")
     sim.add_argument("--max-speed", type=float, help="cells per step (default 0.5)")
     sim.add_argument("--max-accel", type=float, help="cells per step squared (default 0.125)")
-    sim.add_argument(
-        "--max-steps", type=int, help=f"stop after this many steps (default {DEFAULT_MAX_STEPS})"
-    )
-    out = run.add_argument_group("output")
-    out.add_argument("--headless", action="store_true", help="no window: run, print a summary")
-    out.add_argument("--metrics", type=Path, help="write the run's metrics as JSON to this file")
-    out.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
-    commands.add_parser("strategies", help="list the available strategies")
-    return parser
+    sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
+    return shared
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -144,46 +168,64 @@ def list_strategies() -> int:
 
 @dataclass(frozen=True)
 class Prepared:
-    """A run ready to start: its scenario, final settings, and a way to build its swarm."""
+    """A run ready to start: its name, final settings, its world, and how to start a swarm."""
 
-    scenario: Scenario
+    name: str
     settings: dict[str, Any]
-    new_swarm: Callable[[], Swarm]
+    world: World
+    make_swarm: Callable[[World], Swarm]
 
 
 def prepare(args: argparse.Namespace) -> Prepared:
-    """Load the scenario, merge the options into it, and build the world once."""
-    path = args.path or bundled_shapes() / DEFAULT_SHAPE
-    scenario = load_scenario(path, ImageOptions(args.cells, args.threshold, args.invert))
+    """Load the scenario (or a blank canvas to edit), merge the options, build the world."""
+    editing = args.command == "edit"
+    if editing and (args.path is None or not args.path.exists()):  # a new drawing
+        scenario = Scenario(args.path.name if args.path else "untitled", ())
+    else:
+        path = args.path or bundled_shapes() / DEFAULT_SHAPE
+        scenario = load_scenario(path, ImageOptions(args.cells, args.threshold, args.invert))
     settings = _settings(scenario, args)
     specs = list(scenario.groups)
     if args.agents is not None:
         if len(specs) > 1:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
-        specs[0] = replace(specs[0], agents=args.agents)
-    world = build_world(specs, args.arena or scenario.arena)
+        if specs:
+            specs[0] = replace(specs[0], agents=args.agents)
+    if specs:
+        world = build_world(specs, args.arena or scenario.arena)
+    else:
+        colour = parse_colour(PALETTE[0])
+        world = blank_world(args.arena or BLANK_ARENA, BLANK_POSE, scenario.name, colour)
     strategies.get(settings["strategy"])  # fail now, not inside the window
     params = Params(limits=Limits(settings["max_speed"], settings["max_accel"]))
 
-    def new_swarm() -> Swarm:
+    def make_swarm(world: World) -> Swarm:
         strategy = strategies.create(settings["strategy"], order=settings["order"])
         return Swarm(world, strategy, settings["seed"], params)
 
-    return Prepared(scenario, settings, new_swarm)
+    return Prepared(scenario.name, settings, world, make_swarm)
 
 
 def run(args: argparse.Namespace) -> int:
     prepared = prepare(args)
     settings = prepared.settings
-    if not args.headless:
+    editing = args.command == "edit"
+    if editing or not args.headless:
         from swarmshape.viewer import Viewer  # pygame only when a window is wanted
 
         print(f"seed {settings['seed']}")
-        Viewer(prepared.new_swarm, title=prepared.scenario.name, speed=args.speed).run()
+        Viewer(
+            prepared.make_swarm,
+            prepared.world,
+            title=prepared.name,
+            start=not editing,
+            shape_file=args.path if editing else None,
+            speed=args.speed,
+        ).run()
         return 0
-    swarm = prepared.new_swarm()
+    swarm = prepared.make_swarm(prepared.world)
     swarm.run(settings["max_steps"])
-    metrics = run_metrics(swarm, prepared.scenario.name, settings["strategy"])
+    metrics = run_metrics(swarm, prepared.name, settings["strategy"])
     print(summary_line(metrics))
     if args.metrics:
         write_text(args.metrics, json.dumps(metrics, indent=2) + "\n")
@@ -202,7 +244,7 @@ def _settings(scenario: Scenario, args: argparse.Namespace) -> dict[str, Any]:
     }
     chosen = {**defaults, **scenario.settings}
     for key in defaults:
-        value = getattr(args, key)
+        value = getattr(args, key, None)
         if value is not None:
             chosen[key] = value
     if chosen["seed"] is None:

@@ -51,14 +51,19 @@ class Renderer:
         size, (ox, oy) = self.fit(area)
         return pygame.Rect(ox + cell_xy[0] * size, oy + cell_xy[1] * size, size, size)
 
-    def draw(self, surface: pygame.Surface, swarm: Swarm, area: pygame.Rect | None = None) -> None:
-        """Draw the world into `area` (default: all of `surface`), scaled to fit."""
+    def draw(
+        self, surface: pygame.Surface, swarm: Swarm | None, area: pygame.Rect | None = None
+    ) -> None:
+        """Draw the world, and the swarm if there is one, into `area` (default: all of
+        `surface`), scaled to fit."""
         area = area or surface.get_rect()
         cell, origin = self.fit(area)
         background = self._background_at(cell)
         world_rect = surface.blit(background, origin)
         for margin in _margins(area, world_rect):
             surface.fill(OUTSIDE, margin)
+        if swarm is None:
+            return
         gap = 1 if cell >= 4 else 0
         corner = np.floor((swarm.positions() - 0.5) * cell + np.array(origin) + gap).astype(int)
         kind = swarm.group * len(SHADES) + swarm.state

@@ -69,7 +69,7 @@ def load_scenario(path: str | Path, image: ImageOptions | None = None) -> Scenar
     image = image or ImageOptions()
     if path.suffix.lower() != ".toml":
         grid = load_grid(path, cells=image.cells, threshold=image.threshold, invert=image.invert)
-        return Scenario(path.name, (GroupSpec(path.stem, Shape(grid), _rgb(PALETTE[0])),))
+        return Scenario(path.name, (GroupSpec(path.stem, Shape(grid), parse_colour(PALETTE[0])),))
     return _read_toml(path, image)
 
 
@@ -120,7 +120,7 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
         agents = where.typed(agents, int, f"{label}.agents")
     colour = where.typed(table.get("colour", PALETTE[index % len(PALETTE)]), str, f"{label}.colour")
     try:
-        rgb = _rgb(colour)
+        rgb = parse_colour(colour)
     except ValueError:
         raise ScenarioError(f"{where.path}: {label}.colour {colour!r} is not a colour") from None
     pose = None
@@ -135,7 +135,7 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
     return GroupSpec(name, Shape(grid), rgb, agents, pose)
 
 
-def _rgb(colour: str) -> tuple[int, int, int]:
+def parse_colour(colour: str) -> tuple[int, int, int]:
     red, green, blue = ImageColor.getrgb(colour)[:3]
     return red, green, blue
 

@@ -36,25 +36,44 @@ class Pose:
 
     def to_world(self, frame_cells: np.ndarray) -> np.ndarray:
         """Map integer frame cells to world cells (the unit squares rotate about the origin)."""
-        quarter_turns = (self.rotation // 90) % 4
-        centres = np.asarray(frame_cells, dtype=np.float64) + 0.5
-        for _ in range(quarter_turns):
-            centres = np.column_stack([-centres[:, 1], centres[:, 0]])
-        return np.floor(centres).astype(np.int64) + np.array([self.x, self.y])
+        return _turn(frame_cells, self.rotation // 90) + np.array([self.x, self.y])
+
+    def to_frame(self, world_cells: np.ndarray) -> np.ndarray:
+        """The inverse of `to_world`."""
+        return _turn(np.asarray(world_cells) - np.array([self.x, self.y]), -self.rotation // 90)
+
+
+def _turn(cells: np.ndarray, quarter_turns: int) -> np.ndarray:
+    """Rotate unit cells about the origin by quarter turns, clockwise on screen (y down)."""
+    centres = np.asarray(cells, dtype=np.float64).reshape(-1, 2) + 0.5
+    for _ in range(quarter_turns % 4):
+        centres = np.column_stack([-centres[:, 1], centres[:, 0]])
+    return np.floor(centres).astype(np.int64)
 
 
 @dataclass(frozen=True, eq=False)
 class Shape:
-    """A boolean grid and the scale it was shrunk to (1.0 when it was used as drawn)."""
+    """A boolean grid, the scale it was shrunk to (1.0 as drawn), and where its top-left cell
+    sits in the seed frame (a painted shape may start anywhere around the seeds)."""
 
     grid: np.ndarray
     scale: float = 1.0
+    origin: tuple[int, int] = (0, 0)
+
+    @classmethod
+    def from_cells(cls, cells: np.ndarray) -> Shape:
+        """The shape made of these frame cells ``(k, 2)``, cropped, at their own origin."""
+        low = cells.min(axis=0)
+        width, height = cells.max(axis=0) - low + 1
+        grid = np.zeros((height, width), dtype=bool)
+        grid[cells[:, 1] - low[1], cells[:, 0] - low[0]] = True
+        return cls(grid, origin=(int(low[0]), int(low[1])))
 
     @property
     def cells(self) -> np.ndarray:
         """Frame cells ``(k, 2)`` of the shape as ``(x, y)``, in row-major order."""
         rows, cols = np.nonzero(self.grid)
-        return np.column_stack([cols, rows]).astype(np.int64)
+        return np.column_stack([cols, rows]).astype(np.int64) + np.array(self.origin)
 
     @property
     def count(self) -> int:
@@ -75,5 +94,5 @@ class Shape:
         for side in range(long_side - 1, 0, -1):
             smaller = crop(resample(fraction, side))
             if 0 < smaller.sum() <= agents:
-                return Shape(smaller, self.scale * side / long_side)
-        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side)
+                return Shape(smaller, self.scale * side / long_side, self.origin)
+        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)

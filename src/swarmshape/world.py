@@ -115,6 +115,16 @@ class World:
         return np.argwhere(self.outside() & ~placed)
 
 
+def blank_world(
+    size: tuple[int, int], pose: Pose, name: str, colour: tuple[int, int, int]
+) -> World:
+    """An arena with one group's seeds and no shape yet: the editor's empty canvas."""
+    empty = np.zeros((0, 2), dtype=np.int64)
+    seeds = pose.to_world(SEED_CELLS)
+    group = Group(name, colour, Shape(np.zeros((0, 0), dtype=bool)), pose, 0, empty, empty, seeds)
+    return World(size, (group,))
+
+
 def build_world(specs: list[GroupSpec], arena: tuple[int, int] | None = None) -> World:
     """Fit every group's shape to its agents, place it, and size the arena if not given."""
     if not specs:
