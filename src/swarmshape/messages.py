@@ -41,6 +41,3 @@ class MessageQueue:
         delivered = list(self._pending)
         self._pending.clear()
         return delivered
-
-    def __len__(self) -> int:
-        return len(self._pending)

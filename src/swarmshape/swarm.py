@@ -137,34 +137,29 @@ class Swarm:
         self._seed_keys = self._key(world.seeds)
         self._seed_ids = len(self.cell) + np.arange(len(world.seeds))
 
-    def reshape(self, group: int, shape: Shape, pose: Pose | None = None) -> None:
-        """Form a new shape for `group` without a restart (the live editor's hand-over).
+    # --- what strategies call -------------------------------------------------------------
 
-        Agents on cells that stay in the shape keep them and do not move; agents whose cells
-        or targets went away wander; the strategy then hands out the open cells.
-        """
-        old = self.world
-        new = old.reshaped(group, shape, pose or old.groups[group].pose)
-        seeds = new.mask(new.seeds) & ~old.mask(old.seeds)
-        if (self.occupancy[seeds] >= 0).any():
-            raise WorldError("the seeds' new cells are taken by robots; move them elsewhere")
-        renumber = _renumbering(old.targets, new.targets, new.size)
-        has_target = self.target >= 0
-        self.target[has_target] = renumber[self.target[has_target]]
-        lost = has_target & (self.target < 0)
-        self.release(np.flatnonzero(lost))
-        self.filled = np.zeros(len(new.targets), dtype=bool)
-        self.filled[self.target[self.state == SETTLED]] = True
-        self.occupancy[old.mask(old.seeds)] = FREE
-        self.world = new
-        self._index_world()
-        self.completed_at[group] = None
-        self.planner.forget(np.arange(len(self.cell)))
-        hand_out = getattr(self.strategy, "on_reshape", None)
-        if hand_out is None:
-            self.recruit(group)
-        else:
-            hand_out(self, group)
+    def send(self, sender: int, recipient: int, target: int) -> None:
+        """Queue the message "go to `target`" for `recipient`; it arrives next step."""
+        self.queue.send(self.step_count, sender, recipient, target)
+
+    def assign(self, agents: np.ndarray, targets: np.ndarray) -> None:
+        """Start `agents` moving to `targets` (indices into ``world.targets``)."""
+        self.state[agents] = MOVING
+        self.target[agents] = targets
+        self.blocked[agents] = 0
+        self.routed[agents] = not self.concurrent
+        self.recruited[agents] = False
+        self.planner.forget(agents)
+
+    def release(self, agents: np.ndarray) -> None:
+        """Let `agents` wander: they have nothing left to do."""
+        self.state[agents] = WANDERING
+        self.target[agents] = -1
+        self.planner.forget(agents)
+
+    def waiting(self, group: int) -> np.ndarray:
+        return np.flatnonzero((self.state == WAITING) & (self.group == group))
 
     def recruit(self, group: int, match: Matcher = greedy) -> None:
         """Match idle agents of `group` to its open targets and send them there.
@@ -196,30 +191,6 @@ class Swarm:
             [np.flatnonzero(mine & (self.state == state)) for state in (WAITING, WANDERING)]
         )
 
-    # --- what strategies call -------------------------------------------------------------
-
-    def send(self, sender: int, recipient: int, target: int) -> None:
-        """Queue the message "go to `target`" for `recipient`; it arrives next step."""
-        self.queue.send(self.step_count, sender, recipient, target)
-
-    def assign(self, agents: np.ndarray, targets: np.ndarray) -> None:
-        """Start `agents` moving to `targets` (indices into ``world.targets``)."""
-        self.state[agents] = MOVING
-        self.target[agents] = targets
-        self.blocked[agents] = 0
-        self.routed[agents] = not self.concurrent
-        self.recruited[agents] = False
-        self.planner.forget(agents)
-
-    def release(self, agents: np.ndarray) -> None:
-        """Let `agents` wander: they have nothing left to do."""
-        self.state[agents] = WANDERING
-        self.target[agents] = -1
-        self.planner.forget(agents)
-
-    def waiting(self, group: int) -> np.ndarray:
-        return np.flatnonzero((self.state == WAITING) & (self.group == group))
-
     # --- reading the run ------------------------------------------------------------------
 
     @property
@@ -233,6 +204,37 @@ class Swarm:
     def cells_under(self) -> np.ndarray:
         """The cell under each agent's centre ``(n, 2)``."""
         return np.floor(self.positions()).astype(np.int64)
+
+    # --- changing the shape while it runs -----------------------------------------------
+
+    def reshape(self, group: int, shape: Shape, pose: Pose | None = None) -> None:
+        """Form a new shape for `group` without a restart (the live editor's hand-over).
+
+        Agents on cells that stay in the shape keep them and do not move; agents whose cells
+        or targets went away wander; the strategy then hands out the open cells.
+        """
+        old = self.world
+        new = old.reshaped(group, shape, pose or old.groups[group].pose)
+        seeds = new.mask(new.seeds) & ~old.mask(old.seeds)
+        if (self.occupancy[seeds] >= 0).any():
+            raise WorldError("the seeds' new cells are taken by robots; move them elsewhere")
+        renumber = _renumbering(old.targets, new.targets, new.size)
+        has_target = self.target >= 0
+        self.target[has_target] = renumber[self.target[has_target]]
+        lost = has_target & (self.target < 0)
+        self.release(np.flatnonzero(lost))
+        self.filled = np.zeros(len(new.targets), dtype=bool)
+        self.filled[self.target[self.state == SETTLED]] = True
+        self.occupancy[old.mask(old.seeds)] = FREE
+        self.world = new
+        self._index_world()
+        self.completed_at[group] = None
+        self.planner.forget(np.arange(len(self.cell)))
+        hand_out = getattr(self.strategy, "on_reshape", None)
+        if hand_out is None:
+            self.recruit(group)
+        else:
+            hand_out(self, group)
 
     # --- one step -------------------------------------------------------------------------
 
