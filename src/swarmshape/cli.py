@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from importlib import metadata, resources
@@ -24,9 +25,18 @@ from swarmshape.files import write_text
 from swarmshape.fill_order import ORDERS
 from swarmshape.metrics import run_metrics, summary_line
 from swarmshape.motion import Limits
-from swarmshape.scenario import PALETTE, ImageOptions, Scenario, load_scenario, parse_colour
+from swarmshape.scenario import (
+    PALETTE,
+    ImageOptions,
+    Scenario,
+    load_scenario,
+    parse_colour,
+    read_start_cells,
+)
 from swarmshape.shape import Pose
+from swarmshape.state import load_state, save_state
 from swarmshape.swarm import Params, Swarm
+from swarmshape.trace import Trace
 from swarmshape.world import World, blank_world, build_world
 
 DEFAULT_SHAPE = "horseshoe.png"
@@ -122,6 +132,25 @@ def _shared_options() -> argparse.ArgumentParser:
     sim.add_argument("--max-speed", type=float, help="cells per step (default 0.5)")
     sim.add_argument("--max-accel", type=float, help="cells per step squared (default 0.125)")
     sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
+    sim.add_argument(
+        "--start", type=Path, help="CSV of start cells (columns x,y, one row per agent)"
+    )
+    sim.add_argument(
+        "--load-state", type=Path, help="resume a run saved with --save-state (PATH not needed)"
+    )
+    record = shared.add_argument_group("recording")
+    record.add_argument("--record", type=Path, help="write an animation: .gif, .webp or .png")
+    record.add_argument("--frames", type=Path, help="write numbered PNG frames to this folder")
+    record.add_argument(
+        "--record-every", type=int, default=1, help="record every K-th step (default 1)"
+    )
+    record.add_argument("--trace", type=Path, help="write figures per step as CSV")
+    record.add_argument(
+        "--trace-every", type=int, default=1, help="trace every K-th step (default 1)"
+    )
+    record.add_argument(
+        "--save-state", type=Path, help="save the whole run at its end, to resume it later"
+    )
     return shared
 
 
@@ -177,7 +206,13 @@ class Prepared:
 
 
 def prepare(args: argparse.Namespace) -> Prepared:
-    """Load the scenario (or a blank canvas to edit), merge the options, build the world."""
+    """Load the scenario (or a saved run, or a blank canvas), merge the options, build the world."""
+    if args.load_state is not None:
+        saved = load_state(args.load_state)
+        settings = {"strategy": saved.strategy, "seed": saved.swarm.seed, **_run_limits(args)}
+        return Prepared(
+            saved.name, settings, saved.swarm.world, lambda _: load_state(args.load_state).swarm
+        )
     editing = args.command == "edit"
     if editing and (args.path is None or not args.path.exists()):  # a new drawing
         scenario = Scenario(args.path.name if args.path else "untitled", ())
@@ -198,10 +233,12 @@ def prepare(args: argparse.Namespace) -> Prepared:
         world = blank_world(args.arena or BLANK_ARENA, BLANK_POSE, scenario.name, colour)
     strategies.get(settings["strategy"])  # fail now, not inside the window
     params = Params(limits=Limits(settings["max_speed"], settings["max_accel"]))
+    start = None if args.start is None or not specs else read_start_cells(args.start, world)
 
-    def make_swarm(world: World) -> Swarm:
+    def make_swarm(new_world: World) -> Swarm:
         strategy = strategies.create(settings["strategy"], order=settings["order"])
-        return Swarm(world, strategy, settings["seed"], params)
+        cells = start if new_world is world else None  # start cells fit the first world only
+        return Swarm(new_world, strategy, settings["seed"], params, cells)
 
     return Prepared(scenario.name, settings, world, make_swarm)
 
@@ -209,27 +246,95 @@ def prepare(args: argparse.Namespace) -> Prepared:
 def run(args: argparse.Namespace) -> int:
     prepared = prepare(args)
     settings = prepared.settings
+    observers = _observers(args)
     editing = args.command == "edit"
     if editing or not args.headless:
         from swarmshape.viewer import Viewer  # pygame only when a window is wanted
 
         print(f"seed {settings['seed']}")
-        Viewer(
+        viewer = Viewer(
             prepared.make_swarm,
             prepared.world,
             title=prepared.name,
             start=not editing,
             shape_file=args.path if editing else None,
             speed=args.speed,
-        ).run()
+            observers=observers,
+        )
+        viewer.run()
+        swarm = viewer.swarm
+    else:
+        swarm = prepared.make_swarm(prepared.world)
+        _run_headless(swarm, settings["max_steps"], observers)
+    if swarm is None:  # the editor closed before any swarm ran
         return 0
-    swarm = prepared.make_swarm(prepared.world)
-    swarm.run(settings["max_steps"])
+    for observer in observers:
+        observer.close(swarm)
+    if args.save_state:
+        save_state(swarm, args.save_state, name=prepared.name, strategy=settings["strategy"])
+    if editing or not args.headless:
+        return 0
     metrics = run_metrics(swarm, prepared.name, settings["strategy"])
     print(summary_line(metrics))
     if args.metrics:
         write_text(args.metrics, json.dumps(metrics, indent=2) + "\n")
     return 0
+
+
+def _observers(args: argparse.Namespace) -> list:
+    """Recording and tracing, as asked for; each captures the swarm after every step."""
+    observers = []
+    if args.record or args.frames:
+        from swarmshape.record import Recorder  # draws with pygame, offscreen
+
+        observers.append(Recorder(args.record, args.frames, args.record_every))
+    if args.trace:
+        observers.append(Trace(args.trace, args.trace_every))
+    return observers
+
+
+def _run_headless(swarm: Swarm, max_steps: int, observers: list) -> None:
+    """Step to completion or `max_steps`, feeding the observers; show progress on a terminal."""
+    progress = Progress(max_steps) if sys.stderr.isatty() else None
+    for observer in observers:
+        observer.capture(swarm)
+    while not swarm.complete and swarm.step_count < max_steps:
+        swarm.step()
+        for observer in observers:
+            observer.capture(swarm)
+        if progress:
+            progress.show(swarm)
+    if progress:
+        progress.done()
+
+
+class Progress:
+    """A one-line progress bar on stderr, redrawn at most four times a second."""
+
+    WIDTH = 30
+
+    def __init__(self, total: int) -> None:
+        self.total, self._shown = total, 0.0
+
+    def show(self, swarm: Swarm) -> None:
+        now = time.monotonic()
+        if now - self._shown < 0.25:
+            return
+        self._shown = now
+        done = swarm.filled.mean()
+        bar = "#" * int(self.WIDTH * done)
+        sys.stderr.write(
+            f"\r[{bar:<{self.WIDTH}}] coverage {100 * done:5.1f}%  step {swarm.step_count}"
+        )
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        sys.stderr.write("\n")
+
+
+def _run_limits(args: argparse.Namespace) -> dict[str, Any]:
+    steps = getattr(args, "max_steps", None)
+    return {"max_steps": DEFAULT_MAX_STEPS if steps is None else steps}
 
 
 def _settings(scenario: Scenario, args: argparse.Namespace) -> dict[str, Any]:

@@ -26,9 +26,27 @@ from swarmshape.swarm import Swarm
 DIGITS = 6
 
 
+def coverage(swarm: Swarm, group: int | None = None) -> float:
+    """Filled target cells over target cells, of one group or of all."""
+    filled = swarm.filled if group is None else swarm.filled[swarm.world.target_group == group]
+    return round(float(filled.mean()), DIGITS)
+
+
+def iou(swarm: Swarm, group: int | None = None) -> float:
+    """The picture's match with the shape, of one group or averaged over all."""
+    if group is None:
+        groups = range(len(swarm.world.groups))
+        return round(float(np.mean([_iou_of(swarm, g) for g in groups])), DIGITS)
+    return round(_iou_of(swarm, group), DIGITS)
+
+
+def _iou_of(swarm: Swarm, group: int) -> float:
+    occupied = np.floor(swarm.positions()[swarm.group == group]).astype(int)
+    return _iou(swarm.world.groups[group].targets, occupied)
+
+
 def group_metrics(swarm: Swarm, group: int) -> dict[str, Any]:
     placed = swarm.world.groups[group]
-    mine = swarm.world.target_group == group
     members = swarm.group == group
     return {
         "name": placed.name,
@@ -36,10 +54,8 @@ def group_metrics(swarm: Swarm, group: int) -> dict[str, Any]:
         "targets": len(placed.targets),
         "scale": round(placed.shape.scale, DIGITS),
         "steps": swarm.completed_at[group],
-        "coverage": round(float(swarm.filled[mine].mean()), DIGITS),
-        "iou": round(
-            _iou(placed.targets, np.floor(swarm.positions()[members]).astype(int)), DIGITS
-        ),
+        "coverage": coverage(swarm, group),
+        "iou": iou(swarm, group),
         "total_distance": round(float(swarm.distance[members].sum()), DIGITS),
         "overlaps": int(swarm.overlaps[group]),
         **_against_bounds(swarm, members, placed.targets, swarm.completed_at[group]),
@@ -79,7 +95,6 @@ def run_metrics(swarm: Swarm, shape: str, strategy: str) -> dict[str, Any]:
     groups = [group_metrics(swarm, g) for g in range(len(swarm.world.groups))]
     steps = [g["steps"] for g in groups]
     targets = sum(g["targets"] for g in groups)
-    filled = int(swarm.filled.sum())
     return {
         "shape": shape,
         "strategy": strategy,
@@ -90,8 +105,8 @@ def run_metrics(swarm: Swarm, shape: str, strategy: str) -> dict[str, Any]:
         "scale": min(g["scale"] for g in groups),
         "steps": None if None in steps else max(steps),
         "steps_run": swarm.step_count,
-        "coverage": round(filled / targets, DIGITS),
-        "iou": round(float(np.mean([g["iou"] for g in groups])), DIGITS),
+        "coverage": coverage(swarm),
+        "iou": iou(swarm),
         "total_distance": round(float(swarm.distance.sum()), DIGITS),
         "overlaps": int(swarm.overlap_total),
         "messages": len(swarm.queue.log),

@@ -19,17 +19,19 @@ An image is a scenario with one group named after the file.
 
 from __future__ import annotations
 
+import csv
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from PIL import ImageColor
 
 from swarmshape.bitmap import DEFAULT_CELLS, DEFAULT_THRESHOLD, load_grid
 from swarmshape.errors import InputError
 from swarmshape.shape import Pose, Shape
-from swarmshape.world import GroupSpec
+from swarmshape.world import GroupSpec, World
 
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
@@ -167,3 +169,38 @@ class _Where:
         if not ok or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
             raise ScenarioError(f"{self.path}: {key} must be two integers [width, height]")
         return value[0], value[1]
+
+
+def read_start_cells(path: Path, world: World) -> np.ndarray:
+    """Start cells ``(agents, 2)`` from a CSV with columns ``x,y`` (one row per agent, groups
+    in scenario order): free arena cells, none on a shape or a seed, no two alike."""
+    path = Path(path)
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            rows = list(csv.DictReader(handle))
+    except OSError as error:
+        raise InputError(f"{path}: cannot read start positions ({error.strerror})") from None
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise InputError(f"{path}: not a CSV of start positions ({error})") from None
+    try:
+        cells = np.array([[int(row["x"]), int(row["y"])] for row in rows], dtype=np.int64)
+    except (KeyError, TypeError, ValueError):
+        raise InputError(f"{path}: needs integer columns x,y (cells), one row per agent") from None
+    if len(cells) != world.agents:
+        raise InputError(f"{path}: {len(cells)} start positions for {world.agents} agents")
+    allowed = np.zeros(world.size, dtype=bool)
+    free = world.start_cells()
+    allowed[free[:, 0], free[:, 1]] = True
+    inside = (cells >= 0).all(axis=1) & (cells < np.array(world.size)).all(axis=1)
+    ok = np.zeros(len(cells), dtype=bool)
+    ok[inside] = allowed[cells[inside, 0], cells[inside, 1]]
+    bad = np.flatnonzero(~ok)
+    if len(bad):
+        x, y = cells[bad[0]]
+        raise InputError(
+            f"{path}: row {bad[0] + 2} ({x},{y}) is not a free start cell "
+            "(outside the arena, or on or next to a shape or a seed)"
+        )
+    if len(np.unique(cells, axis=0)) < len(cells):
+        raise InputError(f"{path}: two agents start on the same cell")
+    return cells

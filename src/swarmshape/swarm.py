@@ -76,7 +76,12 @@ class Swarm:
     """
 
     def __init__(
-        self, world: World, strategy: Strategy, seed: int, params: Params | None = None
+        self,
+        world: World,
+        strategy: Strategy,
+        seed: int,
+        params: Params | None = None,
+        start: np.ndarray | None = None,
     ) -> None:
         self.world = world
         self.strategy = strategy
@@ -86,8 +91,10 @@ class Swarm:
         self.rng = np.random.default_rng(seed)
         n = world.agents
         self.group = np.repeat(np.arange(len(world.groups)), [g.agents for g in world.groups])
-        starts = world.start_cells()
-        self.cell = starts[self.rng.choice(len(starts), n, replace=False)]
+        if start is None:  # random free cells, drawn from the run's one generator
+            starts = world.start_cells()
+            start = starts[self.rng.choice(len(starts), n, replace=False)]
+        self.cell = np.array(start, dtype=np.int64)
         self.start_cell = self.cell.copy()
         self.direction = np.zeros(n, dtype=np.int64)
         self.ahead = np.zeros(n, dtype=np.int64)

@@ -9,7 +9,7 @@ speed, and draws one frame, so tests can post events and drive it frame by frame
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from math import ceil
 from pathlib import Path
 
@@ -55,6 +55,7 @@ class Viewer:
         speed: float = 8,
         fps: int = 60,
         screenshots: Path = Path(),
+        observers: Sequence = (),
     ) -> None:
         pygame.display.init()  # not pygame.init(): no sound, so no audio device needed
         pygame.font.init()
@@ -70,6 +71,8 @@ class Viewer:
         self.speed_index = min(range(len(SPEEDS)), key=lambda i: abs(SPEEDS[i] - speed))
         self.fps = fps
         self.screenshots = screenshots
+        self.observers = observers
+        """Recorders and traces: each captures the swarm after every step."""
         self.paused = False
         self.running = True
         self.notice = ""
@@ -96,7 +99,7 @@ class Viewer:
         if not self.paused and self.swarm is not None:
             self._budget += self.speed
             while self._budget >= 1:
-                self.swarm.step()
+                self.step()
                 self._budget -= 1
         self.draw()
         pygame.display.flip()
@@ -124,7 +127,7 @@ class Viewer:
             self.paused = not self.paused
         elif key == pygame.K_PERIOD and self.swarm is not None:
             self.paused = True
-            self.swarm.step()
+            self.step()
         elif key in (pygame.K_PLUS, pygame.K_EQUALS, pygame.K_KP_PLUS):
             self.speed_index = min(self.speed_index + 1, len(SPEEDS) - 1)
         elif key in (pygame.K_MINUS, pygame.K_KP_MINUS):
@@ -134,6 +137,11 @@ class Viewer:
             self.notice = f"restarted with seed {self.swarm.seed}"
         elif key == pygame.K_e:
             self.start_editing()
+
+    def step(self) -> None:
+        self.swarm.step()
+        for observer in self.observers:
+            observer.capture(self.swarm)
 
     def quit(self) -> None:
         """Stop; a painting that was never saved is kept as NAME.autosave.png first."""
