@@ -395,7 +395,8 @@ class Swarm:
             return
         successors = next_of[members]
         self.target[successors] = self.target[members]
-        self.blocked[members] = 0
+        # Their waiting time keeps counting: two movers that steered different ways round an
+        # obstacle could trade targets back and forth for ever, and this way they sidestep.
         self.planner.forget(members)
 
     def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
