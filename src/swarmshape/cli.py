@@ -42,7 +42,7 @@ from swarmshape.world import World, blank_world, build_world
 DEFAULT_SHAPE = "horseshoe.png"
 DEFAULT_STRATEGY = "optimal"
 DEFAULT_MAX_STEPS = 500_000
-COMMANDS = ("run", "edit", "strategies")
+COMMANDS = ("run", "edit", "sweep", "plot", "strategies")
 BLANK_ARENA = (48, 30)
 BLANK_POSE = Pose(4, 4)
 
@@ -95,6 +95,22 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         type=Path,
         help="the image to edit; a new file starts blank and is where Ctrl+S saves",
+    )
+    sweep = commands.add_parser(
+        "sweep",
+        help="run many headless runs in parallel, one CSV row each",
+        description="Run the cross product of a sweep file's shapes, strategies, agent counts "
+        "and seeds; resumable (finished rows are skipped).",
+    )
+    sweep.add_argument("file", type=Path, help="a sweep .toml (see sweeps/strategies.toml)")
+    sweep.add_argument("--out", type=Path, help="results CSV (default: beside the sweep file)")
+    sweep.add_argument("--workers", type=int, help="local processes (default: one per core)")
+    sweep.add_argument("--dask", metavar="ADDRESS", help="run on a Dask cluster, tcp://HOST:PORT")
+    plot = commands.add_parser("plot", help="plot a sweep's results (needs the plot extra)")
+    plot.add_argument("results", type=Path, help="a CSV written by swarmshape sweep")
+    plot.add_argument("--out", type=Path, help="folder for the plots (default: beside it)")
+    plot.add_argument(
+        "--format", choices=("png", "svg"), action="append", help="png (default), svg"
     )
     commands.add_parser("strategies", help="list the available strategies")
     return parser
@@ -179,12 +195,37 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "strategies":
             return list_strategies()
+        if args.command == "sweep":
+            return run_sweep(args)
+        if args.command == "plot":
+            return run_plot(args)
         return run(args)
     except InputError as error:
         print(f"swarmshape: error: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130
+
+
+def run_sweep(args: argparse.Namespace) -> int:
+    from swarmshape.sweep import read_sweep, show_progress, sweep
+
+    runs = read_sweep(args.file)
+    out = args.out or args.file.with_suffix(".csv")
+    progress = show_progress if sys.stderr.isatty() else None
+    base = args.file.parent
+    ran = sweep(runs, out, base, dask=args.dask, workers=args.workers, progress=progress)
+    print(f"{out}: {ran} runs done now, {len(runs) - ran} were there already")
+    return 0
+
+
+def run_plot(args: argparse.Namespace) -> int:
+    from swarmshape.plot import plot_results
+
+    out = args.out or args.results.parent
+    for path in plot_results(args.results, out, tuple(args.format or ["png"])):
+        print(path)
+    return 0
 
 
 def list_strategies() -> int:
