@@ -23,8 +23,18 @@ SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 # CI checks the same examples every run, so a red build always reproduces; runs elsewhere
 # draw new ones and so keep exploring.
 settings.register_profile("ci", derandomize=True, print_blob=True)
+settings.register_profile("slow", max_examples=1000)
 if os.environ.get("CI"):
     settings.load_profile("ci")
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--slow", action="store_true", help="many more hypothesis examples")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("--slow"):
+        settings.load_profile("slow")
 
 
 @pytest.fixture

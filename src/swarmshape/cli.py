@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import tempfile
 import time
+import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from importlib import metadata, resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -55,8 +58,15 @@ def bundled_shapes() -> Path:
     return Path(__file__).resolve().parents[2] / "shapes"
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse, but a mistake is one line on stderr like every other bad input."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"swarmshape: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="swarmshape",
         description="Watch a swarm of square robots organise itself into a shape.",
         epilog="Commands: run (the default), edit and strategies. See 'swarmshape run --help'.",
@@ -118,7 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _shared_options() -> argparse.ArgumentParser:
     """Options of both run and edit."""
-    shared = argparse.ArgumentParser(add_help=False)
+    shared = Parser(add_help=False)
     shared.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
     shared.add_argument("--agents", type=int, help="number of agents (default: one per cell)")
     shared.add_argument(
@@ -205,6 +215,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         return 130
+    except Exception:  # a bug of ours: a short word here, the whole story in a log
+        log = Path(tempfile.gettempdir()) / f"swarmshape-crash-{os.getpid()}.log"
+        log.write_text(traceback.format_exc(), encoding="utf-8")
+        print(f"swarmshape: internal error, please report it; details in {log}", file=sys.stderr)
+        return 1
 
 
 def run_sweep(args: argparse.Namespace) -> int:
@@ -285,6 +300,8 @@ def prepare(args: argparse.Namespace) -> Prepared:
 
 
 def run(args: argparse.Namespace) -> int:
+    for option in ("metrics", "record", "trace", "save_state", "frames"):
+        _check_output(getattr(args, option, None), option)
     prepared = prepare(args)
     settings = prepared.settings
     observers = _observers(args)
@@ -373,6 +390,19 @@ class Progress:
         sys.stderr.write("\n")
 
 
+def _check_output(path: Path | None, option: str) -> None:
+    """Fail before the run, not after it, when an output cannot be written."""
+    if path is None:
+        return
+    flag = "--" + option.replace("_", "-")
+    if option != "frames" and path.is_dir():
+        raise InputError(f"{path}: {flag} needs a file name, and this is a folder")
+    # a file goes into an existing folder; the frames folder may be made, inside one
+    existing = path if option == "frames" and path.is_dir() else path.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK):
+        raise InputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
+
+
 def _run_limits(args: argparse.Namespace) -> dict[str, Any]:
     steps = getattr(args, "max_steps", None)
     return {"max_steps": DEFAULT_MAX_STEPS if steps is None else steps}
@@ -395,6 +425,8 @@ def _settings(scenario: Scenario, args: argparse.Namespace) -> dict[str, Any]:
             chosen[key] = value
     if chosen["seed"] is None:
         chosen["seed"] = int(np.random.SeedSequence().generate_state(1)[0])
+    if not 0 <= chosen["seed"] < 2**63:
+        raise InputError(f"--seed must be a whole number from 0 to 2**63 - 1, got {chosen['seed']}")
     if chosen["order"] not in ORDERS:
         raise InputError(f"unknown order {chosen['order']!r}; choose one of {', '.join(ORDERS)}")
     if chosen["max_steps"] < 0:

@@ -25,6 +25,10 @@ ASPECT = 1.6
 
 GROUP_GAP = 4
 
+MAX_AGENTS = 1_000_000
+MAX_ARENA_CELLS = 25_000_000
+"""Caps that keep memory bounded (a million agents need about a gigabyte all told)."""
+
 
 class WorldError(InputError):
     """A layout that cannot be built; the message says what to change."""
@@ -143,6 +147,11 @@ def _place(specs: list[GroupSpec]) -> list[Group]:
         agents = spec.shape.count if spec.agents is None else spec.agents
         if agents < 1:
             raise WorldError(f"group {spec.name!r}: agents must be at least 1, got {agents}")
+        if agents > MAX_AGENTS:
+            raise WorldError(
+                f"group {spec.name!r}: {agents:,} agents is more than the {MAX_AGENTS:,} "
+                "swarmshape simulates; lower --agents or --cells"
+            )
         shape = spec.shape.fitted(agents)
         pose = spec.pose
         if pose is None:  # side by side, left to right, each seed frame at its shape's corner
@@ -196,6 +205,10 @@ def _validate(world: World, *, starts: bool = True) -> None:
     width, height = world.size
     if width < 1 or height < 1:
         raise WorldError(f"arena must be at least 1x1 cells, got {width}x{height}")
+    if width * height > MAX_ARENA_CELLS:
+        raise WorldError(
+            f"arena {width}x{height} is larger than {MAX_ARENA_CELLS:,} cells; make it smaller"
+        )
     for group in world.groups:
         cells = np.concatenate([group.targets, group.seeds])
         if (cells < 0).any() or (cells >= np.array(world.size)).any():

@@ -1,0 +1,113 @@
+"""Every case of docs/errors.md, through the real command line in a subprocess."""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import struct
+import subprocess
+import sys
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tests.conftest import SHAPES
+
+TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
+ROW = re.compile(
+    r"^\| (?P<case>[^|]+) \| `(?P<command>[^`]*)` \| (?P<exit>\d) \| `(?P<message>[^`]*)` \|$"
+)
+
+
+def cases() -> list[tuple[str, str, int, str]]:
+    rows = [ROW.match(line) for line in TABLE.read_text().splitlines()]
+    return [(m["case"].strip(), m["command"], int(m["exit"]), m["message"]) for m in rows if m]
+
+
+def png_chunk(kind: bytes, data: bytes) -> bytes:
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+@pytest.fixture(scope="module")
+def bad_files(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("bad")
+    header = struct.pack(">IIBBBBB", 30000, 30000, 1, 0, 0, 0, 0)
+    bomb = b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", header) + png_chunk(b"IEND", b"")
+    (folder / "bomb.png").write_bytes(bomb)
+    (folder / "empty.png").write_bytes(b"")
+    (folder / "text.png").write_text("not an image")
+    good = (SHAPES / "star.png").read_bytes()
+    (folder / "truncated.png").write_bytes(good[: len(good) // 2])
+    Image.new("L", (1, 1), 0).save(folder / "one.png")
+    Image.new("L", (20, 20), 255).save(folder / "white.png")
+    Image.new("L", (20, 20), 0).save(folder / "black.png")
+    (folder / "bad.toml").write_text("groups = [ {")
+    (folder / "typed.toml").write_text("[[groups]]\nshape = 3\n")
+    (folder / "typo.toml").write_text("[[groups]]\nshap = 'one.png'\n")
+    (folder / "typo-sweep.toml").write_text(
+        "shapes = ['one.png']\nstrategies = ['optimal']\nspeed = 3\n"
+    )
+    (folder / "damaged.state").write_bytes(b"swarmshape state 1\n\x80\x05garbage")
+    (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
+    (folder / "letters.csv").write_text("x,y\na,b\n")
+    (folder / "broken_strategy.py").write_text(
+        "class Broken:\n    name = 'broken'\n    description = 'raises'\n    concurrent = True\n"
+        "    def start(self, swarm):\n        raise RuntimeError('boom')\n"
+        "    def on_settled(self, swarm, agents):\n        pass\n"
+    )
+    return folder
+
+
+def swarmshape(folder: Path, command: str) -> subprocess.CompletedProcess:
+    args = shlex.split(command.replace("{dir}", str(folder)))
+    if args[0] not in ("sweep", "plot"):
+        args += ["--headless"] + ([] if "--max-steps" in args else ["--max-steps", "3"])
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(folder)}
+    return subprocess.run(
+        [sys.executable, "-m", "swarmshape", *args], capture_output=True, text=True, env=env,
+        cwd=folder, timeout=60,
+    )  # fmt: skip
+
+
+def test_the_table_has_every_case():
+    assert len(cases()) >= 35
+
+
+@pytest.mark.parametrize(
+    ("case", "command", "code", "message"), cases(), ids=[c[0] for c in cases()]
+)
+def test_each_bad_input_is_one_clear_line(bad_files, case, command, code, message):
+    result = swarmshape(bad_files, command)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == code, result.stderr
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("swarmshape: "), lines[0]
+    assert message in lines[0]
+    assert "Traceback" not in result.stderr
+    if code == 1:
+        log = Path(lines[0].rsplit(" ", 1)[1])
+        assert "RuntimeError: boom" in log.read_text()
+
+
+@pytest.mark.parametrize(
+    "name", ["one.png", "black.png", "anim.gif", "sixteen.png", "palette.png", "cmyk.jpg"]
+)
+def test_odd_but_valid_images_run(bad_files, name):
+    rng = np.random.default_rng(0)
+    frames = [Image.new("L", (10, 10), 255) for _ in range(3)]
+    frames[0].paste(0, (2, 2, 6, 6))
+    frames[0].save(bad_files / "anim.gif", save_all=True, append_images=frames[1:])
+    Image.fromarray((rng.random((40, 40)) * 65535).astype(np.uint16)).save(
+        bad_files / "sixteen.png"
+    )
+    cutout = Image.new("RGBA", (20, 20), (0, 0, 0, 0))
+    cutout.paste((0, 0, 0, 255), (5, 5, 15, 15))
+    cutout.convert("P").save(bad_files / "palette.png")
+    Image.new("CMYK", (20, 20), (0, 0, 0, 255)).save(bad_files / "cmyk.jpg")
+    result = swarmshape(bad_files, f"{{dir}}/{name}")
+    assert result.returncode == 0, result.stderr
+    assert f"{name}: optimal" in result.stdout
