@@ -89,3 +89,18 @@ def test_start_positions_come_from_a_csv(tmp_path):
     path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in [*cells[:2].tolist(), target]))
     with pytest.raises(InputError, match="row 4"):
         read_start_cells(path, world)
+
+
+def test_outputs_are_not_overwritten_without_force(tmp_path):
+    out = tmp_path / "m.json"
+    out.write_text("precious")
+    assert main([str(SHAPES / "line.png"), "--headless", "--metrics", str(out)]) == 2
+    assert out.read_text() == "precious"
+    run(str(SHAPES / "line.png"), "--headless", "--metrics", str(out), "--force")
+    assert json.loads(out.read_text())["coverage"] == 1.0
+
+
+def test_a_resumed_state_may_be_saved_over_itself(tmp_path):
+    state = tmp_path / "s.state"
+    run(str(SHAPES / "line.png"), "--headless", "--max-steps", "5", "--save-state", str(state))
+    run("--load-state", str(state), "--headless", "--max-steps", "9", "--save-state", str(state))

@@ -177,6 +177,7 @@ def _shared_options() -> argparse.ArgumentParser:
     record.add_argument(
         "--save-state", type=Path, help="save the whole run at its end, to resume it later"
     )
+    record.add_argument("--force", action="store_true", help="overwrite existing output files")
     return shared
 
 
@@ -238,7 +239,12 @@ def run_plot(args: argparse.Namespace) -> int:
     from swarmshape.plot import plot_results
 
     out = args.out or args.results.parent
-    for path in plot_results(args.results, out, tuple(args.format or ["png"])):
+    formats = tuple(args.format or ["png"])
+    for name in ("coverage", "steps"):
+        for form in formats:
+            if (out / f"{name}.{form}").exists() and not args.force:
+                raise InputError(f"{out / name}.{form} exists; add --force to overwrite it")
+    for path in plot_results(args.results, out, formats):
         print(path)
     return 0
 
@@ -301,7 +307,7 @@ def prepare(args: argparse.Namespace) -> Prepared:
 
 def run(args: argparse.Namespace) -> int:
     for option in ("metrics", "record", "trace", "save_state", "frames"):
-        _check_output(getattr(args, option, None), option)
+        _check_output(getattr(args, option, None), option, args)
     prepared = prepare(args)
     settings = prepared.settings
     observers = _observers(args)
@@ -390,11 +396,16 @@ class Progress:
         sys.stderr.write("\n")
 
 
-def _check_output(path: Path | None, option: str) -> None:
-    """Fail before the run, not after it, when an output cannot be written."""
+def _check_output(path: Path | None, option: str, args: argparse.Namespace) -> None:
+    """Fail before the run, not after it, when an output cannot be written, or would
+    overwrite a file the user did not ask to replace (--force, or the state being resumed)."""
     if path is None:
         return
     flag = "--" + option.replace("_", "-")
+    replaces = path.is_file() or (option == "frames" and path.is_dir() and any(path.iterdir()))
+    resumed = args.load_state is not None and path.resolve() == args.load_state.resolve()
+    if replaces and not args.force and not resumed:
+        raise InputError(f"{path}: {flag} would overwrite it; add --force to allow that")
     if option != "frames" and path.is_dir():
         raise InputError(f"{path}: {flag} needs a file name, and this is a folder")
     # a file goes into an existing folder; the frames folder may be made, inside one

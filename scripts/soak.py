@@ -1,0 +1,88 @@
+"""Soak test: a long run with wandering spare robots and live shape changes, checking
+invariants as it goes and that memory stays flat. Not part of the test suite.
+
+    .venv/bin/python scripts/soak.py [--steps 1000000] [--strategy optimal] [--every 20000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import time
+from pathlib import Path
+
+import numpy as np
+
+from swarmshape.bitmap import load_grid
+from swarmshape.motion import overlapping_pairs
+from swarmshape.shape import Shape
+from swarmshape.strategies import create
+from swarmshape.swarm import Swarm
+from swarmshape.world import GroupSpec, build_world
+
+SHAPES = Path(__file__).resolve().parent.parent / "shapes"
+
+
+def resident_mb() -> float:
+    """Current resident memory of this process (Linux /proc), in MB."""
+    pages = int(Path("/proc/self/statm").read_text().split()[1])
+    return pages * resource.getpagesize() / 2**20
+
+
+def violations(swarm: Swarm) -> list[str]:
+    found = []
+    pos = swarm.positions()
+    width, height = swarm.world.size
+    if not np.isfinite(pos).all():
+        found.append("non-finite position")
+    if (pos < 0.5).any() or (pos[:, 0] > width - 0.5).any() or (pos[:, 1] > height - 0.5).any():
+        found.append("left the arena")
+    if len(overlapping_pairs(np.concatenate([pos, swarm.world.seeds + 0.5]))[0]):
+        found.append("overlap")
+    if len(swarm.cell) != swarm.world.agents:
+        found.append("agents not conserved")
+    return found
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=1_000_000)
+    parser.add_argument("--strategy", default="optimal")
+    parser.add_argument("--every", type=int, default=20_000, help="steps between shape changes")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+
+    shapes = [Shape(load_grid(SHAPES / name, cells=12)) for name in ("horseshoe.png", "square.png")]
+    agents = max(s.count for s in shapes) + 30  # spare robots that wander
+    world = build_world([GroupSpec("soak", shapes[0], (58, 111, 216), agents)])
+    swarm = Swarm(world, create(args.strategy), args.seed)
+    started, broken, changes, reformed = time.perf_counter(), [], 0, []
+    memory = {}
+    while swarm.step_count < args.steps:
+        swarm.step()
+        if swarm.step_count == 10_000:
+            memory["after warm-up"] = resident_mb()
+        if swarm.step_count % 1000 == 0:
+            broken += [f"step {swarm.step_count}: {v}" for v in violations(swarm)]
+        if swarm.step_count % args.every == 0:
+            reformed.append(swarm.complete)
+            changes += 1
+            swarm.reshape(0, shapes[changes % 2])
+    memory["at the end"] = resident_mb()
+    seconds = time.perf_counter() - started
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(
+        f"steps {swarm.step_count:,} in {seconds:.0f} s ({swarm.step_count / seconds:,.0f} steps/s)"
+    )
+    print(f"strategy {args.strategy}, {agents} agents, {changes} live shape changes")
+    print(f"shape complete before {sum(reformed)} of {len(reformed)} changes")
+    for when, mb in memory.items():
+        print(f"resident memory {when}: {mb:.1f} MB")
+    print(f"peak resident memory: {peak:.1f} MB")
+    print(f"overlaps counted: {swarm.overlap_total}; invariant violations: {len(broken)}")
+    for line in broken[:10]:
+        print("  " + line)
+
+
+if __name__ == "__main__":
+    main()
