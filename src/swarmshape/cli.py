@@ -11,7 +11,6 @@ import json
 import os
 import sys
 import tempfile
-import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -28,6 +27,7 @@ from swarmshape.files import write_text
 from swarmshape.fill_order import ORDERS
 from swarmshape.metrics import run_metrics, summary_line
 from swarmshape.motion import Limits
+from swarmshape.progress import ProgressBar
 from swarmshape.scenario import (
     PALETTE,
     ImageOptions,
@@ -224,13 +224,20 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from swarmshape.sweep import read_sweep, show_progress, sweep
+    from swarmshape.sweep import read_sweep, sweep
 
     runs = read_sweep(args.file)
     out = args.out or args.file.with_suffix(".csv")
-    progress = show_progress if sys.stderr.isatty() else None
-    base = args.file.parent
-    ran = sweep(runs, out, base, dask=args.dask, workers=args.workers, progress=progress)
+    bar = ProgressBar()
+    ran = sweep(
+        runs,
+        out,
+        args.file.parent,
+        dask=args.dask,
+        workers=args.workers,
+        progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
+    )
+    bar.done()
     print(f"{out}: {ran} runs done now, {len(runs) - ran} were there already")
     return 0
 
@@ -358,42 +365,17 @@ def _observers(args: argparse.Namespace) -> list:
 
 
 def _run_headless(swarm: Swarm, max_steps: int, observers: list) -> None:
-    """Step to completion or `max_steps`, feeding the observers; show progress on a terminal."""
-    progress = Progress(max_steps) if sys.stderr.isatty() else None
+    """Step to completion or `max_steps`, feeding the observers, with a progress bar."""
+    bar = ProgressBar()
     for observer in observers:
         observer.capture(swarm)
     while not swarm.complete and swarm.step_count < max_steps:
         swarm.step()
         for observer in observers:
             observer.capture(swarm)
-        if progress:
-            progress.show(swarm)
-    if progress:
-        progress.done()
-
-
-class Progress:
-    """A one-line progress bar on stderr, redrawn at most four times a second."""
-
-    WIDTH = 30
-
-    def __init__(self, total: int) -> None:
-        self.total, self._shown = total, 0.0
-
-    def show(self, swarm: Swarm) -> None:
-        now = time.monotonic()
-        if now - self._shown < 0.25:
-            return
-        self._shown = now
-        done = swarm.filled.mean()
-        bar = "#" * int(self.WIDTH * done)
-        sys.stderr.write(
-            f"\r[{bar:<{self.WIDTH}}] coverage {100 * done:5.1f}%  step {swarm.step_count}"
-        )
-        sys.stderr.flush()
-
-    def done(self) -> None:
-        sys.stderr.write("\n")
+        coverage = swarm.filled.mean()
+        bar.show(coverage, f"coverage {100 * coverage:5.1f}%  step {swarm.step_count}")
+    bar.done()
 
 
 def _check_output(path: Path | None, option: str, args: argparse.Namespace) -> None:

@@ -19,7 +19,6 @@ import csv
 import itertools
 import json
 import os
-import sys
 import time
 import tomllib
 from collections.abc import Callable, Iterable, Iterator
@@ -204,13 +203,3 @@ def _csv_text(lines: Iterable[list]) -> str:
     buffer = StringIO()
     csv.writer(buffer, lineterminator="\n").writerows(lines)
     return buffer.getvalue()
-
-
-def show_progress(done: int, total: int) -> None:
-    """A progress bar on stderr."""
-    width = 30
-    bar = "#" * (width * done // max(total, 1))
-    sys.stderr.write(f"\r[{bar:<{width}}] {done}/{total} runs")
-    sys.stderr.flush()
-    if done == total:
-        sys.stderr.write("\n")
