@@ -64,3 +64,16 @@ def test_seeds_cannot_move_onto_robots_or_out_of_the_arena():
         swarm.reshape(0, Shape(BEFORE), Pose(int(x), int(y)))
     with pytest.raises(WorldError, match="outside"):
         swarm.reshape(0, Shape(BEFORE), Pose(10_000, 0))
+
+
+def test_repeated_changes_complete_even_over_wandering_agents_and_pending_messages():
+    from swarmshape.bitmap import load_grid
+    from tests.conftest import SHAPES
+
+    shapes = [Shape(load_grid(SHAPES / name, cells=12)) for name in ("horseshoe.png", "square.png")]
+    swarm = make_swarm(shapes[0].grid, agents=120, seed=1, strategy="paper")
+    for change in range(1, 5):
+        swarm.run(swarm.step_count + 15_000)
+        assert swarm.complete, f"change {change}: coverage {swarm.filled.mean():.2f}"
+        swarm.reshape(0, shapes[change % 2])
+    assert swarm.overlap_total == 0

@@ -7,7 +7,8 @@ The log keeps every message ever sent so that tests and users can read the conve
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 SEEDS = -1
 """Sender id of the seed robots, which send each group's first message."""
@@ -35,6 +36,17 @@ class MessageQueue:
         self._pending.append(message)
         self.log.append(message)
         return message
+
+    @property
+    def pending(self) -> list[Message]:
+        """Sent and not yet delivered."""
+        return list(self._pending)
+
+    def retarget(self, new_index: Sequence[int]) -> None:
+        """Renumber pending messages' targets after the shape changed; drop those whose
+        target is gone (``new_index[target] < 0``). The log keeps what was said."""
+        kept = [replace(m, target=int(new_index[m.target])) for m in self._pending]
+        self._pending = deque(m for m in kept if m.target >= 0)
 
     def deliver(self) -> list[Message]:
         """Hand over everything sent so far."""

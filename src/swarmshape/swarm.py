@@ -226,6 +226,7 @@ class Swarm:
         if (self.occupancy[seeds] >= 0).any():
             raise WorldError("the seeds' new cells are taken by robots; move them elsewhere")
         renumber = _renumbering(old.targets, new.targets, new.size)
+        self.queue.retarget(renumber)
         has_target = self.target >= 0
         self.target[has_target] = renumber[self.target[has_target]]
         lost = has_target & (self.target < 0)
@@ -455,13 +456,18 @@ class Swarm:
     def _random_free_step(self, agents: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
         """A random direction to an enterable neighbour cell (0 where there is none).
 
-        Idle agents keep out of every shape, their own group's included.
+        Idle agents keep out of every shape, their own group's included, unless a new shape
+        was drawn over them.
         """
         if len(agents) == 0:
             return np.zeros(0, dtype=np.int64)
-        near = self._key(self.cell[agents])[:, None] + self._neighbour[None, 1:]
+        here = self._key(self.cell[agents])
+        near = here[:, None] + self._neighbour[None, 1:]
         groups = np.full(len(agents), -1) if own_shape_too else self.group[agents]
         ok = self._enterable(near, groups[:, None])
+        # an idle agent that a changed shape now covers must be able to walk out of it
+        caught = np.flatnonzero(own_shape_too & (self._owner[here] >= 0))
+        ok[caught] = self._occupancy[near[caught]] == FREE
         score = np.where(ok, self.rng.random((len(agents), 4)), -1.0)
         best = np.argmax(score, axis=1)
         return np.where(score.max(axis=1) >= 0, best + 1, 0)

@@ -40,7 +40,8 @@ class Paper:
         """Order the open cells anew; the seeds restart the chain if nobody is moving."""
         self._order_open_targets(swarm)
         moving = (swarm.group == group) & (swarm.state == MOVING)
-        if not moving.any():
+        told = [m for m in swarm.queue.pending if swarm.group[m.recipient] == group]
+        if not moving.any() and not told:
             self._hand_on(swarm, group, SEEDS)
 
     def _order_open_targets(self, swarm: Swarm) -> None:
@@ -49,6 +50,7 @@ class Paper:
         first = np.cumsum([0] + [len(g.targets) for g in world.groups])
         taken = np.zeros(len(world.targets), dtype=bool)
         taken[swarm.target[swarm.target >= 0]] = True
+        taken[[m.target for m in swarm.queue.pending]] = True
         self._sequence = []
         for g in range(len(world.groups)):
             sequence = first[g] + fill_sequence(world, g, self.order, swarm.rng)
