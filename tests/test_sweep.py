@@ -88,3 +88,14 @@ def test_bad_sweep_files_say_what_is_wrong(tmp_path, text, message):
     path.write_text(text)
     with pytest.raises(InputError, match=message):
         read_sweep(path)
+
+
+def test_plots_are_not_overwritten_without_force(tiny, tmp_path, capsys):
+    assert main(["sweep", str(tiny), "--workers", "1"]) == 0
+    plots = tmp_path / "plots"
+    assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots)]) == 0
+    before = (plots / "steps.png").stat().st_mtime_ns
+    assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots)]) == 2
+    assert "add --force" in capsys.readouterr().err
+    assert (plots / "steps.png").stat().st_mtime_ns == before
+    assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots), "--force"]) == 0

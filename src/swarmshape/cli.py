@@ -122,6 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument(
         "--format", choices=("png", "svg"), action="append", help="png (default), svg"
     )
+    plot.add_argument("--force", action="store_true", help="overwrite existing plots")
     commands.add_parser("strategies", help="list the available strategies")
     return parser
 
@@ -247,11 +248,7 @@ def run_plot(args: argparse.Namespace) -> int:
 
     out = args.out or args.results.parent
     formats = tuple(args.format or ["png"])
-    for name in ("coverage", "steps"):
-        for form in formats:
-            if (out / f"{name}.{form}").exists() and not args.force:
-                raise InputError(f"{out / name}.{form} exists; add --force to overwrite it")
-    for path in plot_results(args.results, out, formats):
+    for path in plot_results(args.results, out, formats, force=args.force):
         print(path)
     return 0
 

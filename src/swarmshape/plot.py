@@ -13,9 +13,19 @@ from swarmshape.errors import InputError
 from swarmshape.files import atomic_write
 from swarmshape.sweep import read_rows
 
+PLOTS = ("coverage", "steps")
 
-def plot_results(results: Path, out_dir: Path, formats: tuple[str, ...] = ("png",)) -> list[Path]:
-    """Write coverage.FORMAT and steps.FORMAT beside each other; return their paths."""
+
+def plot_results(
+    results: Path, out_dir: Path, formats: tuple[str, ...] = ("png",), *, force: bool = False
+) -> list[Path]:
+    """Write coverage.FORMAT and steps.FORMAT beside each other; return their paths.
+
+    Existing plots are replaced only with `force`, checked before anything is drawn."""
+    targets = [out_dir / f"{name}.{form}" for name in PLOTS for form in formats]
+    taken = [path for path in targets if path.exists()]
+    if taken and not force:
+        raise InputError(f"{taken[0]}: exists; add --force to overwrite it")
     try:
         import matplotlib
 
@@ -30,7 +40,7 @@ def plot_results(results: Path, out_dir: Path, formats: tuple[str, ...] = ("png"
         raise InputError(f"{results}: not a swarmshape sweep CSV")
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, draw in (("coverage", _coverage_over_time), ("steps", _steps_per_agents)):
+    for name, draw in zip(PLOTS, (_coverage_over_time, _steps_per_agents), strict=True):
         figure, axes = plt.subplots(figsize=(7, 4.2), layout="constrained")
         draw(axes, rows)
         for form in formats:
