@@ -24,15 +24,15 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import numpy as np
 import pygame
 
-from swarmshape import assignment
-from swarmshape.bitmap import load_grid
-from swarmshape.fill_order import fill_sequence
-from swarmshape.metrics import run_metrics
-from swarmshape.render import Renderer
-from swarmshape.shape import Shape
-from swarmshape.strategies import create
-from swarmshape.swarm import Swarm
-from swarmshape.world import GroupSpec, World, build_world
+from swarmshape.core import assignment
+from swarmshape.core.metrics import run_metrics
+from swarmshape.core.shape import Shape
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, World, build_world
+from swarmshape.io.bitmap import load_grid
+from swarmshape.runs import RunConfig, run, start_swarm
+from swarmshape.strategies.fill_order import fill_sequence
+from swarmshape.ui.render import Renderer
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 COLOUR = (58, 111, 216)
@@ -52,6 +52,10 @@ def world_of(grid: np.ndarray, agents: int | None = None) -> World:
     return build_world([GroupSpec("bench", Shape(grid), COLOUR, agents)])
 
 
+def swarm_of(world: World, strategy: str = "optimal") -> Swarm:
+    return start_swarm(RunConfig(strategy=strategy, seed=1), world)
+
+
 def timed(action: Callable[[], object]) -> float:
     start = time.perf_counter()
     action()
@@ -60,14 +64,14 @@ def timed(action: Callable[[], object]) -> float:
 
 def steps_per_second(agents: int, steps: int) -> dict:
     world = world_of(disc(agents))
-    swarm = Swarm(world, create("optimal"), seed=1)
-    seconds = timed(lambda: swarm.run(steps))
+    swarm = swarm_of(world)
+    seconds = timed(lambda: run(swarm, max_steps=steps))
     return {"agents": agents, "steps": swarm.step_count, "steps_per_s": swarm.step_count / seconds}
 
 
 def frame_time(agents: int, frames: int) -> dict:
     world = world_of(disc(agents))
-    swarm = Swarm(world, create("optimal"), seed=1)
+    swarm = swarm_of(world)
     pygame.display.init()
     surface = pygame.Surface((1280, 800))
     renderer = Renderer(world)
@@ -117,9 +121,9 @@ def formation(name: str, grid: np.ndarray, strategies: list[str], max_steps: int
     world = world_of(grid)
     rows = []
     for strategy in strategies:
-        swarm = Swarm(world, create(strategy), seed=1)
-        seconds = timed(lambda swarm=swarm: swarm.run(max_steps))
-        metrics = run_metrics(swarm, name, strategy)
+        swarm = swarm_of(world, strategy)
+        seconds = timed(lambda swarm=swarm: run(swarm, max_steps=max_steps))
+        metrics = run_metrics(swarm)
         rows.append(
             {
                 "shape": name,

@@ -14,8 +14,8 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import pygame
 
-from swarmshape.cli import build_parser, prepare
-from swarmshape.viewer import Viewer
+from swarmshape.runs import configure, load_world, start_swarm
+from swarmshape.ui.viewer import Viewer
 
 
 def main() -> None:
@@ -25,11 +25,17 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 800))
-    args, run_options = parser.parse_known_args()
-    command = ["run", str(args.path), "--seed", str(args.seed), *run_options]
-    run = prepare(build_parser().parse_args(command))
+    parser.add_argument("--strategy", default="optimal")
+    args = parser.parse_args()
+    config = configure(args.path, seed=args.seed, strategy=args.strategy)
+    world = load_world(config)
     viewer = Viewer(
-        run.make_swarm, run.world, title=run.name, size=tuple(args.size), speed=1, fps=0
+        lambda new: start_swarm(config, new),
+        world,
+        title=world.name,
+        size=tuple(args.size),
+        speed=1,
+        fps=0,
     )
     while viewer.swarm.step_count < args.steps:
         viewer.swarm.step()

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from swarmshape.bitmap import load_grid
-from swarmshape.motion import overlapping_pairs
-from swarmshape.shape import Shape
-from swarmshape.strategies import create
-from swarmshape.swarm import Swarm
-from swarmshape.world import GroupSpec, build_world
+from swarmshape.core.audit import overlapping_pairs
+from swarmshape.core.shape import Shape
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.io.bitmap import load_grid
+from swarmshape.runs import RunConfig, start_swarm
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 
@@ -55,7 +55,7 @@ def main() -> None:
     shapes = [Shape(load_grid(SHAPES / name, cells=12)) for name in ("horseshoe.png", "square.png")]
     agents = max(s.count for s in shapes) + 30  # spare robots that wander
     world = build_world([GroupSpec("soak", shapes[0], (58, 111, 216), agents)])
-    swarm = Swarm(world, create(args.strategy), args.seed)
+    swarm = start_swarm(RunConfig(strategy=args.strategy, seed=args.seed), world)
     started, broken, changes, reformed = time.perf_counter(), [], 0, []
     memory = {}
     while swarm.step_count < args.steps:

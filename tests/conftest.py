@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
-from swarmshape.shape import Shape
+from swarmshape.core.shape import Shape
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.strategies import create
-from swarmshape.swarm import Swarm
-from swarmshape.world import GroupSpec, World, build_world
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 

@@ -55,9 +55,9 @@ def bad_files(tmp_path_factory) -> Path:
     (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
     (folder / "letters.csv").write_text("x,y\na,b\n")
     (folder / "broken_strategy.py").write_text(
-        "class Broken:\n    name = 'broken'\n    description = 'raises'\n    concurrent = True\n"
-        "    def start(self, swarm):\n        raise RuntimeError('boom')\n"
-        "    def on_settled(self, swarm, agents):\n        pass\n"
+        "from swarmshape import Strategy\n"
+        "class Broken(Strategy):\n    name = 'broken'\n    description = 'raises'\n"
+        "    def on_start(self, swarm):\n        raise RuntimeError('boom')\n"
     )
     return folder
 

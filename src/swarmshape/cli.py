@@ -1,61 +1,30 @@
-"""Command line: ``swarmshape [run] [PATH] [options]`` and ``swarmshape strategies``.
+"""Command line: ``swarmshape [run] [PATH] [options]`` and the other commands; grammar and
+dispatch only.
 
-Bad input of any kind ends in one line on stderr and exit code 2; the viewer and pygame are
-only imported when a window is wanted.
+Bad input of any kind ends in one line on stderr and exit code 2; a bug of ours in one line
+pointing to a log, exit code 1. The window (and pygame) is only loaded when one is wanted.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import tempfile
 import traceback
-from collections.abc import Callable
-from dataclasses import dataclass, replace
-from importlib import metadata, resources
+from importlib import metadata
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn
 
-import numpy as np
-
-from swarmshape import strategies
-from swarmshape.bitmap import DEFAULT_CELLS, DEFAULT_THRESHOLD
 from swarmshape.errors import InputError
-from swarmshape.files import write_text
-from swarmshape.fill_order import ORDERS
-from swarmshape.metrics import run_metrics, summary_line
-from swarmshape.motion import Limits
-from swarmshape.progress import ProgressBar
-from swarmshape.scenario import (
-    PALETTE,
-    ImageOptions,
-    Scenario,
-    load_scenario,
-    parse_colour,
-    read_start_cells,
-)
-from swarmshape.shape import Pose
-from swarmshape.state import load_state, save_state
-from swarmshape.swarm import Params, Swarm
-from swarmshape.trace import Trace
-from swarmshape.world import World, blank_world, build_world
+from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure
+from swarmshape.session import Outputs, Session
+from swarmshape.strategies.fill_order import ORDERS
 
-DEFAULT_SHAPE = "horseshoe.png"
-DEFAULT_STRATEGY = "optimal"
-DEFAULT_MAX_STEPS = 500_000
-COMMANDS = ("run", "edit", "sweep", "plot", "strategies")
-BLANK_ARENA = (48, 30)
-BLANK_POSE = Pose(4, 4)
-
-
-def bundled_shapes() -> Path:
-    """The shipped shapes: inside an installed wheel, or the source checkout's shapes/."""
-    installed = resources.files("swarmshape") / "shapes"
-    if installed.is_dir():
-        return Path(str(installed))
-    return Path(__file__).resolve().parents[2] / "shapes"
+COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check")
+RUN_OPTIONS = ("strategy", "order", "seed", "agents", "cells", "threshold", "arena",
+               "max_speed", "max_accel", "max_steps", "start")  # fmt: skip
+"""Command-line options that are fields of `RunConfig` (``--invert`` too, when given)."""
 
 
 class Parser(argparse.ArgumentParser):
@@ -69,7 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="swarmshape",
         description="Watch a swarm of square robots organise itself into a shape.",
-        epilog="Commands: run (the default), edit and strategies. See 'swarmshape run --help'.",
+        epilog="Commands: run (the default), edit, sweep, plot, strategies and check. "
+        "See 'swarmshape COMMAND --help'.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     commands = parser.add_subparsers(dest="command")
@@ -90,7 +60,9 @@ def build_parser() -> argparse.ArgumentParser:
     out = run.add_argument_group("output")
     out.add_argument("--headless", action="store_true", help="no window: run, print a summary")
     out.add_argument(
-        "--max-steps", type=int, help=f"stop after this many steps (default {DEFAULT_MAX_STEPS})"
+        "--max-steps",
+        type=int,
+        help=f"stop after this many steps (default {RunConfig.max_steps})",
     )
     out.add_argument("--metrics", type=Path, help="write the run's metrics as JSON to this file")
     edit = commands.add_parser(
@@ -124,43 +96,61 @@ def build_parser() -> argparse.ArgumentParser:
     )
     plot.add_argument("--force", action="store_true", help="overwrite existing plots")
     commands.add_parser("strategies", help="list the available strategies")
+    check = commands.add_parser(
+        "check",
+        help="run a strategy on small random shapes and report any broken invariant",
+        description="Run a strategy on small random shapes, twice per seed, and report in plain "
+        "words any overlap, robot leaving the arena, settled robot moving, run that differs for "
+        "the same seed, or shape never formed. Exit 0 when clean, 3 when something broke.",
+    )
+    check.add_argument("strategy", help="a name from 'swarmshape strategies' or module:Class")
+    check.add_argument("--runs", type=int, default=20, help="random shapes to try (default 20)")
+    check.add_argument("--seed", type=int, default=0, help="seed of the first shape (default 0)")
+    check.add_argument(
+        "--max-steps", type=int, default=20_000, help="steps to form each shape (default 20000)"
+    )
     return parser
 
 
 def _shared_options() -> argparse.ArgumentParser:
-    """Options of both run and edit."""
+    """Options of both run and edit; unset ones fall back to the scenario, then the defaults."""
+    defaults = RunConfig()
     shared = Parser(add_help=False)
     shared.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
-    shared.add_argument("--agents", type=int, help="number of agents (default: one per cell)")
+    shared.add_argument("--agents", type=int, help="number of robots (default: one per cell)")
     shared.add_argument(
         "--strategy",
         help=f"who goes where: a name from 'swarmshape strategies' or package.module:Class "
-        f"(default {DEFAULT_STRATEGY})",
+        f"(default {defaults.strategy})",
     )
     shared.add_argument(
-        "--order", choices=ORDERS, help="the paper strategy's fill order (default outward)"
+        "--order",
+        choices=ORDERS,
+        help=f"the paper strategy's fill order (default {defaults.order})",
     )
     image = shared.add_argument_group("image loading")
     image.add_argument(
         "--cells",
         type=int,
-        default=DEFAULT_CELLS,
-        help=f"longest side of the shape in cells; larger images shrink (default {DEFAULT_CELLS})",
+        help=f"longest side of the shape in cells; larger images shrink (default {defaults.cells})",
     )
     image.add_argument(
         "--threshold",
         type=float,
-        default=DEFAULT_THRESHOLD,
-        help=f"luminance 0..1 between ink and background (default {DEFAULT_THRESHOLD})",
+        help=f"luminance 0..1 between ink and background (default {defaults.threshold})",
     )
     image.add_argument("--invert", action="store_true", help="the ink is the light part")
     sim = shared.add_argument_group("simulation")
     sim.add_argument("--arena", type=_size, help="arena size in cells as WxH (default: automatic)")
-    sim.add_argument("--max-speed", type=float, help="cells per step (default 0.5)")
-    sim.add_argument("--max-accel", type=float, help="cells per step squared (default 0.125)")
+    sim.add_argument(
+        "--max-speed", type=float, help=f"cells per step (default {defaults.max_speed})"
+    )
+    sim.add_argument(
+        "--max-accel", type=float, help=f"cells per step squared (default {defaults.max_accel})"
+    )
     sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
     sim.add_argument(
-        "--start", type=Path, help="CSV of start cells (columns x,y, one row per agent)"
+        "--start", type=Path, help="CSV of start cells (columns x,y, one row per robot)"
     )
     sim.add_argument(
         "--load-state", type=Path, help="resume a run saved with --save-state (PATH not needed)"
@@ -205,13 +195,7 @@ def main(argv: list[str] | None = None) -> int:
         argv.insert(0, "run")
     args = build_parser().parse_args(argv)
     try:
-        if args.command == "strategies":
-            return list_strategies()
-        if args.command == "sweep":
-            return run_sweep(args)
-        if args.command == "plot":
-            return run_plot(args)
-        return run(args)
+        return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
         print(f"swarmshape: error: {error}", file=sys.stderr)
         return 2
@@ -224,27 +208,44 @@ def main(argv: list[str] | None = None) -> int:
         return 1
 
 
-def run_sweep(args: argparse.Namespace) -> int:
-    from swarmshape.sweep import read_sweep, sweep
-
-    runs = read_sweep(args.file)
-    out = args.out or args.file.with_suffix(".csv")
-    bar = ProgressBar()
-    ran = sweep(
-        runs,
-        out,
-        args.file.parent,
-        dask=args.dask,
-        workers=args.workers,
-        progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
+def run_session(args: argparse.Namespace) -> int:
+    """``run`` and ``edit``: a run described by the options, or a saved one resumed."""
+    max_steps = getattr(args, "max_steps", None)
+    if args.load_state is not None:
+        config = RunConfig(**({} if max_steps is None else {"max_steps": max_steps}))
+    else:
+        given = {name: getattr(args, name, None) for name in RUN_OPTIONS}
+        config = configure(args.path, **given, invert=args.invert or None)
+    outputs = Outputs(
+        metrics=getattr(args, "metrics", None),
+        record=args.record,
+        frames=args.frames,
+        record_every=args.record_every,
+        trace=args.trace,
+        trace_every=args.trace_every,
+        save_state=args.save_state,
+        force=args.force,
     )
-    bar.done()
-    print(f"{out}: {ran} runs done now, {len(runs) - ran} were there already")
+    editing = args.command == "edit"
+    Session(
+        config,
+        outputs,
+        resume=args.load_state,
+        window=editing or not args.headless,
+        editing=editing,
+        speed=args.speed,
+    ).start()
     return 0
 
 
+def run_sweep(args: argparse.Namespace) -> int:
+    from swarmshape.experiments.sweep import run_sweep_file
+
+    return run_sweep_file(args.file, args.out, dask=args.dask, workers=args.workers)
+
+
 def run_plot(args: argparse.Namespace) -> int:
-    from swarmshape.plot import plot_results
+    from swarmshape.experiments.plot import plot_results
 
     out = args.out or args.results.parent
     formats = tuple(args.format or ["png"])
@@ -253,172 +254,29 @@ def run_plot(args: argparse.Namespace) -> int:
     return 0
 
 
-def list_strategies() -> int:
-    known = strategies.available()
+def list_strategies(args: argparse.Namespace) -> int:
+    from swarmshape.strategies import available
+
+    known = available()
     width = max(len(name) for name in known)
     for name, cls in sorted(known.items()):
         print(f"{name:<{width}}  {cls.description}")
     return 0
 
 
-@dataclass(frozen=True)
-class Prepared:
-    """A run ready to start: its name, final settings, its world, and how to start a swarm."""
+def run_check(args: argparse.Namespace) -> int:
+    from swarmshape.check import check_strategy
 
-    name: str
-    settings: dict[str, Any]
-    world: World
-    make_swarm: Callable[[World], Swarm]
+    report = check_strategy(args.strategy, runs=args.runs, seed=args.seed, max_steps=args.max_steps)
+    print(report.text())
+    return 0 if report.clean else 3
 
 
-def prepare(args: argparse.Namespace) -> Prepared:
-    """Load the scenario (or a saved run, or a blank canvas), merge the options, build the world."""
-    if args.load_state is not None:
-        saved = load_state(args.load_state)
-        settings = {"strategy": saved.strategy, "seed": saved.swarm.seed, **_run_limits(args)}
-        return Prepared(
-            saved.name, settings, saved.swarm.world, lambda _: load_state(args.load_state).swarm
-        )
-    editing = args.command == "edit"
-    if editing and (args.path is None or not args.path.exists()):  # a new drawing
-        scenario = Scenario(args.path.name if args.path else "untitled", ())
-    else:
-        path = args.path or bundled_shapes() / DEFAULT_SHAPE
-        scenario = load_scenario(path, ImageOptions(args.cells, args.threshold, args.invert))
-    settings = _settings(scenario, args)
-    specs = list(scenario.groups)
-    if args.agents is not None:
-        if len(specs) > 1:
-            raise InputError("--agents applies to one shape; set agents per group in the scenario")
-        if specs:
-            specs[0] = replace(specs[0], agents=args.agents)
-    if specs:
-        world = build_world(specs, args.arena or scenario.arena)
-    else:
-        colour = parse_colour(PALETTE[0])
-        world = blank_world(args.arena or BLANK_ARENA, BLANK_POSE, scenario.name, colour)
-    strategies.get(settings["strategy"])  # fail now, not inside the window
-    params = Params(limits=Limits(settings["max_speed"], settings["max_accel"]))
-    start = None if args.start is None or not specs else read_start_cells(args.start, world)
-
-    def make_swarm(new_world: World) -> Swarm:
-        strategy = strategies.create(settings["strategy"], order=settings["order"])
-        cells = start if new_world is world else None  # start cells fit the first world only
-        return Swarm(new_world, strategy, settings["seed"], params, cells)
-
-    return Prepared(scenario.name, settings, world, make_swarm)
-
-
-def run(args: argparse.Namespace) -> int:
-    for option in ("metrics", "record", "trace", "save_state", "frames"):
-        _check_output(getattr(args, option, None), option, args)
-    prepared = prepare(args)
-    settings = prepared.settings
-    observers = _observers(args)
-    editing = args.command == "edit"
-    if editing or not args.headless:
-        from swarmshape.viewer import Viewer  # pygame only when a window is wanted
-
-        print(f"seed {settings['seed']}")
-        viewer = Viewer(
-            prepared.make_swarm,
-            prepared.world,
-            title=prepared.name,
-            start=not editing,
-            shape_file=args.path if editing else None,
-            speed=args.speed,
-            observers=observers,
-        )
-        viewer.run()
-        swarm = viewer.swarm
-    else:
-        swarm = prepared.make_swarm(prepared.world)
-        _run_headless(swarm, settings["max_steps"], observers)
-    if swarm is None:  # the editor closed before any swarm ran
-        return 0
-    for observer in observers:
-        observer.close(swarm)
-    if args.save_state:
-        save_state(swarm, args.save_state, name=prepared.name, strategy=settings["strategy"])
-    if editing or not args.headless:
-        return 0
-    metrics = run_metrics(swarm, prepared.name, settings["strategy"])
-    print(summary_line(metrics))
-    if args.metrics:
-        write_text(args.metrics, json.dumps(metrics, indent=2) + "\n")
-    return 0
-
-
-def _observers(args: argparse.Namespace) -> list:
-    """Recording and tracing, as asked for; each captures the swarm after every step."""
-    observers = []
-    if args.record or args.frames:
-        from swarmshape.record import Recorder  # draws with pygame, offscreen
-
-        observers.append(Recorder(args.record, args.frames, args.record_every))
-    if args.trace:
-        observers.append(Trace(args.trace, args.trace_every))
-    return observers
-
-
-def _run_headless(swarm: Swarm, max_steps: int, observers: list) -> None:
-    """Step to completion or `max_steps`, feeding the observers, with a progress bar."""
-    bar = ProgressBar()
-    for observer in observers:
-        observer.capture(swarm)
-    while not swarm.complete and swarm.step_count < max_steps:
-        swarm.step()
-        for observer in observers:
-            observer.capture(swarm)
-        coverage = swarm.filled.mean()
-        bar.show(coverage, f"coverage {100 * coverage:5.1f}%  step {swarm.step_count}")
-    bar.done()
-
-
-def _check_output(path: Path | None, option: str, args: argparse.Namespace) -> None:
-    """Fail before the run, not after it, when an output cannot be written, or would
-    overwrite a file the user did not ask to replace (--force, or the state being resumed)."""
-    if path is None:
-        return
-    flag = "--" + option.replace("_", "-")
-    replaces = path.is_file() or (option == "frames" and path.is_dir() and any(path.iterdir()))
-    resumed = args.load_state is not None and path.resolve() == args.load_state.resolve()
-    if replaces and not args.force and not resumed:
-        raise InputError(f"{path}: {flag} would overwrite it; add --force to allow that")
-    if option != "frames" and path.is_dir():
-        raise InputError(f"{path}: {flag} needs a file name, and this is a folder")
-    # a file goes into an existing folder; the frames folder may be made, inside one
-    existing = path if option == "frames" and path.is_dir() else path.parent
-    if not existing.is_dir() or not os.access(existing, os.W_OK):
-        raise InputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
-
-
-def _run_limits(args: argparse.Namespace) -> dict[str, Any]:
-    steps = getattr(args, "max_steps", None)
-    return {"max_steps": DEFAULT_MAX_STEPS if steps is None else steps}
-
-
-def _settings(scenario: Scenario, args: argparse.Namespace) -> dict[str, Any]:
-    """Command-line options win over the scenario's values, which win over defaults."""
-    defaults = {
-        "strategy": DEFAULT_STRATEGY,
-        "order": "outward",
-        "seed": None,
-        "max_steps": DEFAULT_MAX_STEPS,
-        "max_speed": Limits.max_speed,
-        "max_accel": Limits.max_accel,
-    }
-    chosen = {**defaults, **scenario.settings}
-    for key in defaults:
-        value = getattr(args, key, None)
-        if value is not None:
-            chosen[key] = value
-    if chosen["seed"] is None:
-        chosen["seed"] = int(np.random.SeedSequence().generate_state(1)[0])
-    if not 0 <= chosen["seed"] < 2**63:
-        raise InputError(f"--seed must be a whole number from 0 to 2**63 - 1, got {chosen['seed']}")
-    if chosen["order"] not in ORDERS:
-        raise InputError(f"unknown order {chosen['order']!r}; choose one of {', '.join(ORDERS)}")
-    if chosen["max_steps"] < 0:
-        raise InputError(f"--max-steps must be 0 or more, got {chosen['max_steps']}")
-    return chosen
+COMMAND_FUNCTIONS = {
+    "run": run_session,
+    "edit": run_session,
+    "sweep": run_sweep,
+    "plot": run_plot,
+    "strategies": list_strategies,
+    "check": run_check,
+}

@@ -1,31 +1,9 @@
-"""Strategy plug-ins: who goes to which target, and when; the core moves agents there.
+"""The strategy registry: every plug-in by name, built-in, installed, or named on the command line.
 
-A strategy is a class with a ``name``, a one-line ``description``, ``concurrent`` (True when
-many agents move at once, False for the paper's one at a time) and the two hooks of `Strategy`.
-`register` makes it reachable as ``--strategy NAME``; any importable class also works as
-``--strategy package.module:Class``, and installed packages can offer theirs under the
-entry-point group ``swarmshape.strategies``. A complete user strategy::
-
-    import numpy as np
-    from swarmshape.strategies import register
-
-    @register
-    class NearestFirst:
-        name = "nearest-first"
-        description = "targets in order, each takes the nearest free agent of its group"
-        concurrent = True
-
-        def start(self, swarm):
-            free = np.ones(len(swarm.cell), dtype=bool)
-            for target, cell in enumerate(swarm.world.targets):
-                mine = free & (swarm.group == swarm.world.target_group[target])
-                distance = np.abs(swarm.cell - cell).sum(axis=1)
-                agent = np.flatnonzero(mine)[np.argmin(distance[mine])]
-                free[agent] = False
-                swarm.assign(np.array([agent]), np.array([target]))
-
-        def on_settled(self, swarm, agents):
-            pass
+A strategy subclasses `swarmshape.core.steering.Strategy`. `register` makes it reachable as
+``--strategy NAME``; installed packages offer theirs under the entry-point group
+``swarmshape.strategies``; on the command line ``package.module:Class`` also works. The README's
+"Writing a strategy" shows a complete one, and ``examples/my_strategy.py`` runs it.
 """
 
 from __future__ import annotations
@@ -33,29 +11,12 @@ from __future__ import annotations
 import importlib
 import inspect
 from importlib.metadata import entry_points
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+from typing import Any
 
-import numpy as np
-
+from swarmshape.core.steering import Strategy
 from swarmshape.errors import InputError
 
-if TYPE_CHECKING:
-    from swarmshape.swarm import Swarm
-
 ENTRY_POINTS = "swarmshape.strategies"
-
-
-class Strategy(Protocol):
-    name: ClassVar[str]
-    description: ClassVar[str]
-    concurrent: ClassVar[bool]
-
-    def start(self, swarm: Swarm) -> None:
-        """Hand out the first targets (by ``swarm.send`` or ``swarm.assign``)."""
-
-    def on_settled(self, swarm: Swarm, agents: np.ndarray) -> None:
-        """React to `agents` having settled on their targets this step."""
-
 
 REGISTRY: dict[str, type[Strategy]] = {}
 
@@ -84,15 +45,15 @@ def get(name: str) -> type[Strategy]:
             choices = ", ".join(sorted(known))
             raise InputError(f"unknown strategy {name!r}; choose one of {choices}")
         cls = known[name]
-    missing = [hook for hook in ("start", "on_settled") if not callable(getattr(cls, hook, None))]
-    if missing:
-        raise InputError(f"strategy {name!r} lacks {' and '.join(missing)}(swarm, ...)")
+    if not (isinstance(cls, type) and issubclass(cls, Strategy)):
+        raise InputError(f"strategy {name!r} is not a subclass of swarmshape.Strategy")
     return cls
 
 
-def create(name: str, **options: Any) -> Strategy:
-    """A new strategy, given those of `options` its constructor accepts (e.g. ``order``)."""
-    cls = get(name)
+def create(strategy: str | type[Strategy], **options: Any) -> Strategy:
+    """A new strategy (by name or class), given those of `options` its constructor accepts
+    (e.g. ``order``)."""
+    cls = strategy if isinstance(strategy, type) else get(strategy)
     accepted = inspect.signature(cls).parameters
     return cls(**{key: value for key, value in options.items() if key in accepted})
 

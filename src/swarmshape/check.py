@@ -1,0 +1,155 @@
+"""Check any strategy against the invariants every run must keep, and say in plain words what
+broke: ``check_strategy("optimal")`` or ``swarmshape check my_strategies.py:Mine``.
+
+Each random shape is run twice with the same seed. At every step the robots' squares must not
+overlap (seeds included), stay in the arena, keep their number, and settled robots must stay
+where they are; the two runs must be identical step by step (randomness from anywhere but
+``swarm.rng`` shows up here); and the shape must form within the step limit and stay formed
+for `AFTER_FORMED` steps more.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swarmshape import strategies
+from swarmshape.core.audit import overlapping_pairs
+from swarmshape.core.shape import Shape
+from swarmshape.core.states import SETTLED
+from swarmshape.core.steering import Strategy
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, World, build_world
+from swarmshape.runs import Runner
+
+AFTER_FORMED = 50
+"""Steps a formed shape is watched for, with its spare robots wandering."""
+
+
+class InvariantWatch:
+    """An observer that notes, in words, every invariant a run breaks, and fingerprints each
+    step so that two runs can be compared."""
+
+    def __init__(self, limit: int = 5) -> None:
+        self.problems: list[str] = []
+        self.limit = limit
+        """Problems kept per run; the first few say enough."""
+        self.digest = hashlib.sha256()
+        self._cells: np.ndarray | None = None
+        self._settled: np.ndarray | None = None
+        self._formed = False
+
+    def capture(self, swarm: Swarm) -> None:
+        step = swarm.step_count
+        pos = swarm.positions()
+        width, height = swarm.world.size
+        if not (np.isfinite(pos).all() and np.isfinite(swarm.speed).all()):
+            self._note(f"step {step}: a position or speed is not a finite number")
+        elif (
+            (pos < 0.5).any() or (pos[:, 0] > width - 0.5).any() or (pos[:, 1] > height - 0.5).any()
+        ):
+            robot = int(
+                np.flatnonzero(((pos < 0.5) | (pos > (width - 0.5, height - 0.5))).any(1))[0]
+            )
+            self._note(f"step {step}: robot {robot} left the {width}x{height} arena")
+        everything = np.concatenate([pos, swarm.world.seeds + 0.5])
+        i, j = overlapping_pairs(everything)
+        if len(i):
+            self._note(f"step {step}: {_name(i[0], len(pos))} and {_name(j[0], len(pos))} overlap")
+        if len(swarm.cell) != swarm.world.agents:
+            self._note(
+                f"step {step}: {len(swarm.cell)} robots where there were {swarm.world.agents}"
+            )
+        if self._settled is not None:
+            still = self._settled & (swarm.state == SETTLED)
+            moved = np.flatnonzero(still & (swarm.cell != self._cells).any(axis=1))
+            if len(moved):
+                self._note(f"step {step}: robot {moved[0]} moved while settled")
+        if self._formed and not swarm.complete:
+            self._note(f"step {step}: the formed shape lost a cell without any change to it")
+        self._formed |= swarm.complete
+        self._cells, self._settled = swarm.cell.copy(), swarm.state == SETTLED
+        self.digest.update(np.ascontiguousarray(pos).tobytes())
+        self.digest.update(swarm.state.tobytes())
+
+    def close(self, swarm: Swarm) -> None:
+        """Nothing to write."""
+
+    def _note(self, problem: str) -> None:
+        if len(self.problems) < self.limit:
+            self.problems.append(problem)
+
+
+def _name(index: int, robots: int) -> str:
+    return f"robot {index}" if index < robots else f"seed {index - robots}"
+
+
+@dataclass
+class Report:
+    """What `check_strategy` found."""
+
+    strategy: str
+    runs: int
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def clean(self) -> bool:
+        return not self.problems
+
+    def text(self) -> str:
+        head = f"strategy {self.strategy!r}: {self.runs} random shapes, each run twice"
+        if self.clean:
+            return f"{head}: no problems found"
+        lines = [f"{head}: {len(self.problems)} problems"]
+        return "\n".join(lines + [f"  - {problem}" for problem in self.problems])
+
+
+def check_strategy(
+    strategy: str | type[Strategy], *, runs: int = 20, seed: int = 0, max_steps: int = 20_000
+) -> Report:
+    """Run `strategy` (a name, ``module:Class``, or a class) on `runs` small random shapes and
+    report every broken invariant."""
+    cls = strategy if isinstance(strategy, type) else strategies.get(strategy)
+    report = Report(cls.name, runs)
+    shapes = np.random.default_rng(seed)
+    for index in range(runs):
+        world = random_world(shapes)
+        run_seed = int(shapes.integers(2**32))
+        where = (
+            f"shape {index} ({len(world.targets)} cells, {world.agents} robots, seed {run_seed})"
+        )
+        watches = [watch_run(world, cls, run_seed, max_steps) for _ in "ab"]
+        for watch in watches[:1]:
+            report.problems += [f"{where}: {problem}" for problem in watch.problems]
+        if watches[0].digest.digest() != watches[1].digest.digest():
+            report.problems.append(
+                f"{where}: the same seed gave a different run (use swarm.rng for randomness)"
+            )
+    return report
+
+
+def watch_run(world: World, cls: type[Strategy], seed: int, max_steps: int) -> InvariantWatch:
+    """Run one strategy on `world` to the end under an `InvariantWatch`."""
+    watch = InvariantWatch()
+    runner = Runner(Swarm(world, strategies.create(cls), seed), [watch], max_steps)
+    swarm = runner.finish()
+    if not swarm.complete:
+        coverage = swarm.filled.mean()
+        watch.problems.append(f"not formed after {max_steps} steps (coverage {coverage:.0%})")
+    for _ in range(AFTER_FORMED):
+        runner.step()
+    return watch
+
+
+def random_world(rng: np.random.Generator) -> World:
+    """A small random shape with a few robots too many or too few, in a roomy arena."""
+    height, width = rng.integers(3, 7, size=2)
+    grid = rng.random((height, width)) < rng.uniform(0.3, 0.9)
+    grid[rng.integers(height), rng.integers(width)] = True
+    agents = max(1, int(grid.sum()) + int(rng.integers(-3, 7)))
+    spec = GroupSpec("check", Shape(grid), (58, 111, 216), agents)
+    auto = build_world([spec])
+    room = int(rng.integers(0, 12))
+    return build_world([spec], (auto.size[0] + room, auto.size[1] + room // 2))

@@ -1,0 +1,61 @@
+"""Boolean grids shared by shapes and images: cropping to the ink and shrinking by area.
+
+A grid here is indexed ``[row, col]`` with row 0 at the top, as an image is seen. Images are
+read elsewhere (`swarmshape.io.bitmap`); these operations are numpy only, so the core can shrink
+a shape to fewer robots while it runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def crop(grid: np.ndarray) -> np.ndarray:
+    """Cut the empty rows and columns around the ink (an empty grid stays as it is)."""
+    return bounding_box(grid) if grid.any() else grid
+
+
+def bounding_box(image: np.ndarray) -> np.ndarray:
+    """The smallest block of rows and columns holding every non-zero pixel."""
+    rows = np.flatnonzero(image.any(axis=1))
+    cols = np.flatnonzero(image.any(axis=0))
+    return image[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
+
+
+def resample(fraction: np.ndarray, long_side: int) -> np.ndarray:
+    """Shrink a 0..1 ink image so its long side is at most `long_side`; ink where >= half.
+
+    Each output cell averages the pixels whose centres fall in its box, first along rows and
+    then along columns, in float32 between the passes: the filter Pillow calls BOX, so shapes
+    shrink the same way images are loaded.
+    """
+    height, width = fraction.shape
+    factor = long_side / max(height, width)
+    if factor >= 1.0:
+        return fraction >= 0.5
+    size = (max(1, round(width * factor)), max(1, round(height * factor)))
+    shrunk = fraction.astype(np.float32)
+    if size[0] != width:
+        shrunk = _box_average(shrunk, size[0], axis=1)
+    if size[1] != height:
+        shrunk = _box_average(shrunk, size[1], axis=0)
+    return shrunk >= 0.5
+
+
+def _box_average(image: np.ndarray, out: int, axis: int) -> np.ndarray:
+    """Average along `axis` down to `out` samples, summing in double in pixel order."""
+    moved = np.moveaxis(image, axis, -1)
+    size = moved.shape[-1]
+    scale = size / out
+    support = 0.5 * max(scale, 1.0)
+    centre = (np.arange(out) + 0.5) * scale
+    first = np.maximum((centre - support + 0.5).astype(np.int64), 0)
+    last = np.minimum((centre + support + 0.5).astype(np.int64), size)
+    taps = np.arange(int(np.ceil(support)) * 2 + 1)
+    position = (taps[None, :] + first[:, None] - centre[:, None] + 0.5) * (1.0 / max(scale, 1.0))
+    inside = (position > -0.5) & (position <= 0.5) & (taps[None, :] < (last - first)[:, None])
+    weight = inside / inside.sum(axis=1, keepdims=True)
+    total = np.zeros((*moved.shape[:-1], out))
+    for tap in taps:
+        total += moved[..., np.minimum(first + tap, size - 1)] * weight[:, tap]
+    return np.moveaxis(total.astype(np.float32), -1, axis)

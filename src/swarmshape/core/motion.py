@@ -1,0 +1,87 @@
+"""How agents move and never collide: lattice reservations, speed and acceleration limits.
+
+An agent always holds the cell it is in plus the cells it has reserved ahead along one axis
+(``ahead`` of them); it travels from its cell's centre toward the last reserved centre and
+brakes so that it can always stop there. A cell is reserved only when it is free (see
+`swarmshape.core.lattice`), so two squares never overlap; `swarmshape.core.audit` checks that.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from swarmshape.errors import InputError
+
+STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
+"""Direction index -> unit step; index 0 means "no direction"."""
+
+TOUCH = 1.0 - 1e-9
+"""Squares whose centres are closer than this on both axes overlap; touching is allowed."""
+
+
+class Motion(Enum):
+    """How a strategy's robots go to their targets, declared by the strategy.
+
+    The modes differ in three rules of `swarmshape.core.steering`: whether a new mover plans a
+    path, what a blocked mover does, and what its path may cross.
+    """
+
+    SWAP = "swap"
+    """Many move at once: steer straight, swap targets with a settled robot in the way and pass
+    targets round rings of robots waiting on each other (TSWAP); plan a path only around fixed
+    obstacles (seeds, other groups' shapes)."""
+    ROUTE = "route"
+    """A few move at once (the paper's): plan a path around the other robots, and wait."""
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Kinematic limits in cells per step (speed) and cells per step squared (acceleration)."""
+
+    max_speed: float = 0.5
+    max_accel: float = 0.125
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.max_speed <= 1.0:
+            raise InputError(f"max speed must be in (0, 1] cells per step, got {self.max_speed}")
+        if not 0.0 < self.max_accel <= self.max_speed:
+            raise InputError(f"max acceleration must be in (0, max speed], got {self.max_accel}")
+
+
+def advance(offset: np.ndarray, speed: np.ndarray, ahead: np.ndarray, limits: Limits) -> np.ndarray:
+    """Move every agent along its reserved run for one step; return how far each went.
+
+    Speed rises by at most ``max_accel`` and is capped so that, braking at ``max_accel``, the
+    agent stops by the last reserved centre (``ahead - offset`` away). Updates in place.
+    """
+    room = np.maximum(ahead - offset, 0.0)
+    a = limits.max_accel
+    # the largest v whose braking run v + (v - a) + (v - 2a) + ... still fits in `room`
+    whole = np.floor((np.sqrt(1.0 + 8.0 * room / a) - 1.0) / 2.0)
+    stop_cap = (room + a * whole * (whole + 1.0) / 2.0) / (whole + 1.0)
+    step = np.minimum.reduce([np.full_like(speed, limits.max_speed), speed + a, stop_cap, room])
+    step[ahead == 0] = 0.0
+    offset += step
+    speed[:] = step
+    return step
+
+
+def positions(cell: np.ndarray, direction: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """Square centres in world units: cell centre plus progress toward the next cell."""
+    return cell + 0.5 + offset[:, None] * STEPS[direction]
+
+
+def resolve_claims(keys: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Among claims on the same cell key, pick one winner at random; return a winner mask."""
+    shuffled = rng.permutation(len(keys))
+    _, first = np.unique(keys[shuffled], return_index=True)
+    wins = np.zeros(len(keys), dtype=bool)
+    wins[shuffled[first]] = True
+    return wins
+
+
+def inside(cells: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    return (cells >= 0).all(axis=1) & (cells < np.array(size)).all(axis=1)

@@ -1,0 +1,98 @@
+"""A shape in its seed frame: which cells it has, where the seeds sit, and how it is placed.
+
+Frame coordinates are ``(x, y) = (col, row)`` of the bitmap, y growing downward as in the image.
+The seed robots occupy fixed frame cells just outside the shape's top-left corner; placing the
+frame with a `Pose` moves and rotates the shape and its seeds together.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from swarmshape.core.grid import crop, resample
+from swarmshape.errors import InputError
+
+SEED_CELLS = np.array([[-1, -1], [0, -1], [1, -1], [-1, 0]])
+"""Four seeds in an L: the long arm marks the frame's x axis, the short one its y axis."""
+
+
+class ShapeError(InputError):
+    """A shape or pose that cannot be used; the message says why."""
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Where the seed frame sits in the arena: origin cell and rotation (clockwise on screen)."""
+
+    x: int = 0
+    y: int = 0
+    rotation: int = 0
+
+    def __post_init__(self) -> None:
+        if self.rotation % 90:
+            raise ShapeError(f"rotation must be a multiple of 90 degrees, got {self.rotation}")
+
+    def to_world(self, frame_cells: np.ndarray) -> np.ndarray:
+        """Map integer frame cells to world cells (the unit squares rotate about the origin)."""
+        return _turn(frame_cells, self.rotation // 90) + np.array([self.x, self.y])
+
+    def to_frame(self, world_cells: np.ndarray) -> np.ndarray:
+        """The inverse of `to_world`."""
+        return _turn(np.asarray(world_cells) - np.array([self.x, self.y]), -self.rotation // 90)
+
+
+def _turn(cells: np.ndarray, quarter_turns: int) -> np.ndarray:
+    """Rotate unit cells about the origin by quarter turns, clockwise on screen (y down)."""
+    centres = np.asarray(cells, dtype=np.float64).reshape(-1, 2) + 0.5
+    for _ in range(quarter_turns % 4):
+        centres = np.column_stack([-centres[:, 1], centres[:, 0]])
+    return np.floor(centres).astype(np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Shape:
+    """A boolean grid, the scale it was shrunk to (1.0 as drawn), and where its top-left cell
+    sits in the seed frame (a painted shape may start anywhere around the seeds)."""
+
+    grid: np.ndarray
+    scale: float = 1.0
+    origin: tuple[int, int] = (0, 0)
+
+    @classmethod
+    def from_cells(cls, cells: np.ndarray) -> Shape:
+        """The shape made of these frame cells ``(k, 2)``, cropped, at their own origin."""
+        low = cells.min(axis=0)
+        width, height = cells.max(axis=0) - low + 1
+        grid = np.zeros((height, width), dtype=bool)
+        grid[cells[:, 1] - low[1], cells[:, 0] - low[0]] = True
+        return cls(grid, origin=(int(low[0]), int(low[1])))
+
+    @property
+    def cells(self) -> np.ndarray:
+        """Frame cells ``(k, 2)`` of the shape as ``(x, y)``, in row-major order."""
+        rows, cols = np.nonzero(self.grid)
+        return np.column_stack([cols, rows]).astype(np.int64) + np.array(self.origin)
+
+    @property
+    def count(self) -> int:
+        return int(self.grid.sum())
+
+    def fitted(self, agents: int) -> Shape:
+        """The largest rescaled copy whose cell count does not exceed `agents`.
+
+        The paper's answer to too few robots: form the same shape, smaller. The scale is the
+        ratio of long sides, so a user can read how much was lost.
+        """
+        if agents < 1:
+            raise ShapeError("at least one agent is needed to form a shape")
+        if self.count <= agents:
+            return self
+        long_side = max(self.grid.shape)
+        fraction = self.grid.astype(np.float64)
+        for side in range(long_side - 1, 0, -1):
+            smaller = crop(resample(fraction, side))
+            if 0 < smaller.sum() <= agents:
+                return Shape(smaller, self.scale * side / long_side, self.origin)
+        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)

@@ -1,0 +1,480 @@
+"""Central strategies: the base class a planner subclasses, what it may see, and the driver
+that brings robots to the targets it hands out.
+
+A `Strategy` never receives the `Swarm` itself, only a `SwarmView`: the robots' cells, groups,
+states and targets (read-only), the world, the run's random generator, and four actions
+(`assign`, `send`, `release`, `recruit`). `Steering` is the swarm's driver for it. Each step it
+turns delivered messages into assignments, picks a next cell for every mover (straight, or down
+a planned path), resolves what stands in a blocked mover's way (idle robots step aside; under
+`Motion.SWAP` the TSWAP rules of `swarmshape.core.tswap`), lets spare robots wander, and claims
+the cells through the swarm. Robots resting on their targets settle, and the strategy hears so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+from swarmshape.core.assignment import Matcher, greedy
+from swarmshape.core.lattice import FREE, SEED, WALL
+from swarmshape.core.messages import MessageQueue
+from swarmshape.core.motion import STEPS, Motion
+from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
+from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
+from swarmshape.core.tswap import rotate_rings, settled_swaps
+
+if TYPE_CHECKING:
+    from swarmshape.core.messages import Message
+    from swarmshape.core.swarm import Swarm
+    from swarmshape.core.world import World
+
+
+class Strategy:
+    """Base class of central planners: who goes to which target cell, and when.
+
+    Subclass it, give it a ``name`` and a one-line ``description``, and hand out targets in
+    `on_start`; every other hook has a default. ``motion`` declares how robots move.
+    Randomness must come from ``swarm.rng`` so that runs repeat exactly per seed.
+    """
+
+    name: ClassVar[str]
+    description: ClassVar[str]
+    motion: ClassVar[Motion] = Motion.SWAP
+
+    def on_start(self, swarm: SwarmView) -> None:
+        """Hand out the first targets, by ``swarm.assign`` or ``swarm.send``."""
+        raise NotImplementedError(f"strategy {self.name!r} must define on_start(swarm)")
+
+    def on_settled(self, swarm: SwarmView, robots: np.ndarray) -> None:
+        """`robots` reached their targets this step. Default: nothing to do."""
+
+    def on_reshape(self, swarm: SwarmView, group: int) -> None:
+        """The group's shape changed while running. Default: idle robots take the open cells."""
+        swarm.recruit(group)
+
+    def drive(self, swarm: Swarm) -> Steering:
+        """The swarm's driver for this plug-in (the core's side of the contract)."""
+        return Steering(swarm, self)
+
+
+class SwarmView:
+    """What a strategy may read and call; arrays are read-only views, indexed by robot."""
+
+    def __init__(self, steering: Steering) -> None:
+        self._steering = steering
+        self._swarm = steering.swarm
+
+    # --- reading ----------------------------------------------------------------------------
+
+    @property
+    def cells(self) -> np.ndarray:
+        """Each robot's cell ``(n, 2)`` (the one it is in or leaving)."""
+        return _read_only(self._swarm.cell)
+
+    @property
+    def group(self) -> np.ndarray:
+        """Each robot's group index."""
+        return _read_only(self._swarm.group)
+
+    @property
+    def state(self) -> np.ndarray:
+        """Each robot's `swarmshape.core.states.State`."""
+        return _read_only(self._swarm.state)
+
+    @property
+    def target(self) -> np.ndarray:
+        """Each robot's target index into `targets`, or -1."""
+        return _read_only(self._steering.target)
+
+    @property
+    def world(self) -> World:
+        return self._swarm.world
+
+    @property
+    def targets(self) -> np.ndarray:
+        """Every target cell ``(m, 2)``, all groups' in order."""
+        return self._swarm.world.targets
+
+    @property
+    def target_group(self) -> np.ndarray:
+        """The group of each target."""
+        return self._swarm.world.target_group
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The run's one random generator: the only source of randomness a strategy may use."""
+        return self._swarm.rng
+
+    @property
+    def step(self) -> int:
+        return self._swarm.step_count
+
+    @property
+    def pending(self) -> list[Message]:
+        """Messages sent and not yet delivered."""
+        return self._steering.queue.pending
+
+    def waiting(self, group: int) -> np.ndarray:
+        """Robots of `group` waiting for a target."""
+        return self._steering.waiting(group)
+
+    def idle(self, group: int) -> np.ndarray:
+        """Robots of `group` without a task: waiting first, then wandering."""
+        return self._steering.idle(group)
+
+    def open_targets(self, group: int) -> np.ndarray:
+        """Targets of `group` that nobody is settled on or heading for."""
+        return self._steering.open_targets(group)
+
+    # --- acting -----------------------------------------------------------------------------
+
+    def assign(self, robots: np.ndarray, targets: np.ndarray) -> None:
+        """Start `robots` moving to `targets` (indices into `targets`) now."""
+        self._steering.assign(robots, targets)
+
+    def send(self, sender: int, recipient: int, target: int) -> None:
+        """Message "go to `target`" to `recipient`; it arrives, and it starts, next step."""
+        self._steering.send(sender, recipient, target)
+
+    def release(self, robots: np.ndarray) -> None:
+        """Let `robots` wander: they have nothing left to do."""
+        self._steering.release(robots)
+
+    def recruit(self, group: int, match: Matcher = greedy) -> None:
+        """Match idle robots of `group` to its open targets with `match` and send them there."""
+        self._steering.recruit(group, match)
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
+class Steering:
+    """Targets per robot, and the rules that bring robots to them without deadlock."""
+
+    def __init__(self, swarm: Swarm, strategy: Strategy) -> None:
+        self.swarm = swarm
+        self.strategy = strategy
+        self.motion = strategy.motion
+        n = len(swarm.cell)
+        self.target = np.full(n, -1, dtype=np.int64)
+        self.blocked = np.zeros(n, dtype=np.int64)
+        """Steps each mover has waited behind something at rest."""
+        self.routed = np.zeros(n, dtype=bool)
+        """Robots that follow a planned path instead of steering straight."""
+        self.recruited = np.zeros(n, dtype=bool)
+        """Robots sent to a changed shape's new cells (they spare settled robots if they can)."""
+        self.queue = MessageQueue()
+        self.planner = FieldPlanner(swarm.world.size, n)
+        self.view = SwarmView(self)
+
+    def index_world(self) -> None:
+        """What the rules derive from the world's targets (again after a reshape)."""
+        self.target_mask = self.swarm.world.mask(self.swarm.world.targets)
+        self._crossings = CrossingCounter(self.target_mask)
+
+    def start(self) -> None:
+        self.strategy.on_start(self.view)
+
+    @property
+    def messages_sent(self) -> int:
+        return len(self.queue.log)
+
+    # --- what strategies call, through their view ---------------------------------------------
+
+    def send(self, sender: int, recipient: int, target: int) -> None:
+        self.queue.send(self.swarm.step_count, sender, recipient, target)
+
+    def assign(self, robots: np.ndarray, targets: np.ndarray) -> None:
+        self.swarm.state[robots] = MOVING
+        self.target[robots] = targets
+        self.blocked[robots] = 0
+        self.routed[robots] = self.motion is Motion.ROUTE
+        self.recruited[robots] = False
+        self.planner.forget(robots)
+
+    def release(self, robots: np.ndarray) -> None:
+        self.swarm.state[robots] = WANDERING
+        self.target[robots] = -1
+        self.planner.forget(robots)
+
+    def waiting(self, group: int) -> np.ndarray:
+        swarm = self.swarm
+        return np.flatnonzero((swarm.state == WAITING) & (swarm.group == group))
+
+    def idle(self, group: int) -> np.ndarray:
+        swarm = self.swarm
+        mine = swarm.group == group
+        return np.concatenate(
+            [np.flatnonzero(mine & (swarm.state == state)) for state in (WAITING, WANDERING)]
+        )
+
+    def open_targets(self, group: int) -> np.ndarray:
+        taken = np.zeros(len(self.swarm.filled), dtype=bool)
+        taken[self.target[self.target >= 0]] = True
+        return np.flatnonzero((self.swarm.world.target_group == group) & ~taken)
+
+    def recruit(self, group: int, match: Matcher = greedy) -> None:
+        """Recruits plan paths around settled robots when they can, so robots that already
+        hold their cells stay put; only a cell walled in by settled robots makes them swap."""
+        targets, robots = self.open_targets(group), self.idle(group)
+        if len(targets) == 0 or len(robots) == 0:
+            return
+        swarm = self.swarm
+        goals, cells = swarm.world.targets[targets].astype(float), swarm.cell[robots].astype(float)
+        if len(robots) >= len(targets):
+            self.assign(robots[match(cells, goals, swarm.rng)], targets)
+        else:  # too few robots: each robot takes a target, the rest stay open
+            self.assign(robots, targets[match(goals, cells, swarm.rng)])
+        self.routed[robots] = True
+        self.recruited[robots] = True
+
+    # --- the swarm's calls ----------------------------------------------------------------------
+
+    def decide(self) -> None:
+        """Every robot that wants a next cell claims it through the swarm."""
+        self._deliver_messages()
+        starters, cruisers, stuck = self._who_moves()
+        self._plan(starters[self.routed[starters]])
+        movers = np.concatenate([starters, cruisers])
+        steps = self._next_cells(movers, len(starters))
+        pushed = self._make_way(steps.blocked, steps.blocker)
+        steppers = np.unique(np.concatenate([pushed, self._roaming()]))
+        robots = np.concatenate([movers[steps.may], steppers, stuck])
+        directions = np.concatenate(
+            [
+                steps.chosen[steps.may],
+                self._random_free_step(steppers, own_shape_too=True),
+                self._random_free_step(stuck, own_shape_too=False),
+            ]
+        )
+        lattice, cell = self.swarm.lattice, self.swarm.cell
+        origins = np.concatenate(
+            [steps.origin_key[steps.may], lattice.key(cell[steppers]), lattice.key(cell[stuck])]
+        )
+        winners = self.swarm.claim(robots, directions, origins)
+        self._count_waiting(starters, stuck, steps, winners)
+
+    def arrived(self) -> None:
+        """Moving robots resting on their own target settle there; the strategy hears of it."""
+        swarm = self.swarm
+        candidates = np.flatnonzero((swarm.state == MOVING) & (swarm.ahead == 0))
+        goals = swarm.world.targets[self.target[candidates]]
+        done = candidates[(swarm.cell[candidates] == goals).all(axis=1)]
+        swarm.state[done] = SETTLED
+        swarm.filled[self.target[done]] = True
+        self.planner.forget(done)
+        if len(done):
+            self.strategy.on_settled(self.view, done)
+
+    def completed(self, group: int) -> None:
+        """A group's shape is complete: its robots still waiting are spare and may wander."""
+        self.release(self.waiting(group))
+
+    def reshaped(self, renumber: np.ndarray) -> None:
+        """The targets were renumbered (-1: gone); robots whose target went away wander."""
+        self.queue.retarget(renumber)
+        has_target = self.target >= 0
+        self.target[has_target] = renumber[self.target[has_target]]
+        self.release(np.flatnonzero(has_target & (self.target < 0)))
+        self.swarm.filled[self.target[self.swarm.state == SETTLED]] = True
+
+    def hand_out(self, group: int) -> None:
+        """After a reshape: everyone plans afresh, and the strategy hands out the open cells."""
+        self.planner.forget(np.arange(len(self.target)))
+        self.strategy.on_reshape(self.view, group)
+
+    # --- one step, phase by phase ---------------------------------------------------------------
+
+    def _deliver_messages(self) -> None:
+        for message in self.queue.deliver():
+            self.assign(np.array([message.recipient]), np.array([message.target]))
+
+    def _who_moves(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Movers at rest (starters), movers under way (cruisers), and long-blocked movers that
+        sidestep instead, each with even odds per step so that two robots stuck on each other
+        do not dodge in lockstep."""
+        swarm = self.swarm
+        moving = swarm.state == MOVING
+        starters = np.flatnonzero(moving & (swarm.ahead == 0))
+        stuck = starters[self.blocked[starters] >= 2 * self.swarm.params.patience]
+        if len(stuck):
+            stuck = stuck[swarm.rng.random(len(stuck)) < 0.5]
+            starters = np.setdiff1d(starters, stuck, assume_unique=True)
+        cruisers = np.flatnonzero(moving & (swarm.ahead == 1))
+        return starters, cruisers, stuck
+
+    def _next_cells(self, movers: np.ndarray, starters: int) -> _Steps:
+        """Each mover's next cell: its first choice if enterable, else (for starters) its second;
+        cruisers may only extend their run straight on. Starters that cannot go are blocked."""
+        swarm, lattice = self.swarm, self.swarm.lattice
+        origin = swarm.cell[movers] + STEPS[swarm.direction[movers]] * swarm.ahead[movers, None]
+        first, second = self._preferences(movers, origin)
+        origin_key = lattice.key(origin)
+        groups = swarm.group[movers]
+        first_free = lattice.enterable(origin_key + lattice.offsets[first], groups)
+        second_free = lattice.enterable(origin_key + lattice.offsets[second], groups)
+        is_starter = np.arange(len(movers)) < starters
+        use_second = ~first_free & second_free & (second > 0) & is_starter
+        chosen = np.where(use_second, second, first)
+        may = (chosen > 0) & (first_free | use_second)
+        may &= is_starter | (chosen == swarm.direction[movers])
+
+        waiting = ~may[:starters]
+        blocked, blocked_first = movers[:starters][waiting], first[:starters][waiting]
+        blocked_at = origin_key[:starters][waiting] + lattice.offsets[blocked_first]
+        owner = lattice.owner[blocked_at]
+        foreign = (owner >= 0) & (owner != swarm.group[blocked])
+        blocker = np.where((blocked_first > 0) & ~foreign, lattice.holder[blocked_at], WALL)
+        return _Steps(chosen, may, origin_key, blocked, blocker)
+
+    def _preferences(self, movers: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each mover's preferred and second-best direction (0 for none)."""
+        swarm = self.swarm
+        goals = swarm.world.targets[self.target[movers]]
+        first, second = straight_preferences(
+            origin, goals, swarm.direction[movers], self._crossings
+        )
+        routed = self.routed[movers]
+        if routed.any():
+            first[routed] = self.planner.directions(
+                movers[routed], origin[routed], goals[routed], swarm.direction[movers[routed]]
+            )
+            second[routed] = 0
+        return first, second
+
+    def _make_way(self, blocked: np.ndarray, blocker: np.ndarray) -> np.ndarray:
+        """Resolve what stands in blocked movers' way; return idle robots asked to step aside.
+
+        Idle robots (waiting or wandering, at rest) step aside. Under `Motion.SWAP` a settled
+        robot of the same group swaps targets with the mover, a ring of resting movers each
+        waiting for the next passes its targets round, and a seed or another group's settled
+        robot makes the mover plan a path around it.
+        """
+        swarm = self.swarm
+        robot = np.maximum(blocker, 0)
+        is_robot = blocker >= 0
+        state = swarm.state[robot]
+        at_rest = swarm.ahead[robot] == 0
+        idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
+        if self.motion is Motion.ROUTE:
+            return blocker[idle]
+        same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
+        settled = is_robot & (state == SETTLED)
+        waits_for_mover = same_group & at_rest & (state == MOVING)
+        receivers, targets = rotate_rings(
+            self.target, blocked[waits_for_mover], robot[waits_for_mover]
+        )
+        self.target[receivers] = targets
+        # Their waiting time keeps counting: two movers that steered different ways round an
+        # obstacle could trade targets back and forth for ever, and this way they sidestep.
+        self.planner.forget(receivers)
+        swap = settled & same_group
+        self._swap_with_settled(*settled_swaps(blocked[swap], robot[swap]))
+        fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group)
+        self.routed[blocked[fixed]] = True
+        return blocker[idle]
+
+    def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
+        """The settled robot takes the mover's target and moves on; the mover takes its cell."""
+        swarm = self.swarm
+        swarm.filled[self.target[settled]] = False
+        swarm.state[settled] = MOVING
+        self.target[movers], self.target[settled] = self.target[settled], self.target[movers].copy()
+        both = np.concatenate([movers, settled])
+        self.blocked[both] = 0
+        self.planner.forget(both)
+
+    def _roaming(self) -> np.ndarray:
+        """Wanderers at rest that try a random step this step."""
+        swarm = self.swarm
+        return np.flatnonzero(
+            (swarm.state == WANDERING)
+            & (swarm.ahead == 0)
+            & (swarm.rng.random(len(swarm.state)) < self.swarm.params.wander_rate)
+        )
+
+    def _random_free_step(self, robots: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
+        """A random direction to an enterable neighbour cell (0 where there is none).
+
+        Idle robots keep out of every shape, their own group's included, unless a new shape was
+        drawn over them.
+        """
+        if len(robots) == 0:
+            return np.zeros(0, dtype=np.int64)
+        swarm, lattice = self.swarm, self.swarm.lattice
+        here = lattice.key(swarm.cell[robots])
+        near = here[:, None] + lattice.offsets[None, 1:]
+        groups = np.full(len(robots), -1) if own_shape_too else swarm.group[robots]
+        ok = lattice.enterable(near, groups[:, None])
+        # an idle robot that a changed shape now covers must be able to walk out of it
+        caught = np.flatnonzero(own_shape_too & (lattice.owner[here] >= 0))
+        ok[caught] = lattice.holder[near[caught]] == FREE
+        score = np.where(ok, swarm.rng.random((len(robots), 4)), -1.0)
+        best = np.argmax(score, axis=1)
+        return np.where(score.max(axis=1) >= 0, best + 1, 0)
+
+    def _count_waiting(
+        self, starters: np.ndarray, stuck: np.ndarray, steps: _Steps, winners: np.ndarray
+    ) -> None:
+        """Moving on resets a mover's wait; waiting behind something at rest adds to it, and
+        at `patience` steps the mover plans afresh."""
+        swarm = self.swarm
+        moved = np.zeros(len(swarm.state), dtype=bool)
+        moved[winners] = True
+        self.blocked[stuck] = 0
+        self.blocked[starters[moved[starters]]] = 0
+        robot = np.maximum(steps.blocker, 0)
+        at_rest = (steps.blocker < 0) | (swarm.ahead[robot] == 0)
+        self.blocked[steps.blocked[at_rest]] += 1
+        replan = starters[self.blocked[starters] == self.swarm.params.patience]
+        self.planner.forget(np.concatenate([replan, stuck]))
+
+    def _plan(self, starters: np.ndarray) -> None:
+        """Give each routed starter without a field one, in the strictest view that works.
+
+        Nobody enters a seed or another group's shape. Under `Motion.ROUTE` a mover also goes
+        around every robot if it can, else around resting ones, else around settled ones only.
+        Under `Motion.SWAP` movers swap their way through settled robots; recruits of a changed
+        shape first try to go around them, so that robots on kept cells stay put.
+        """
+        needing = starters[~self.planner.planned(starters)].tolist()
+        if not needing:
+            return
+        swarm = self.swarm
+        holder = swarm.lattice.grid
+        robot_here = holder >= 0
+        robot = np.maximum(holder, 0)
+        settled = robot_here & (swarm.state[robot] == SETTLED)
+        resting = robot_here & (swarm.state[robot] != MOVING)
+        width, height = swarm.world.size
+        owner = swarm.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
+        for group in np.unique(swarm.group[needing]).tolist():
+            fixed = (holder == SEED) | ((owner >= 0) & (owner != group))
+            if self.motion is Motion.ROUTE:
+                views = [~fixed & ~robot_here, ~fixed & ~resting, ~fixed & ~settled]
+            for agent in [a for a in needing if swarm.group[a] == group]:
+                if self.motion is Motion.SWAP:
+                    views = [~fixed & ~settled, ~fixed] if self.recruited[agent] else [~fixed]
+                cell = swarm.cell[agent]
+                own = [view.copy() for view in views]
+                for view in own:
+                    view[cell[0], cell[1]] = True
+                goal = swarm.world.targets[self.target[agent]]
+                self.planner.plan(agent, cell, goal, own)
+
+
+@dataclass(frozen=True)
+class _Steps:
+    """The movers' choices in one step: direction, whether it may be claimed, where from; and
+    the starters that could not go, with what blocks each (a robot index or a holder code)."""
+
+    chosen: np.ndarray
+    may: np.ndarray
+    origin_key: np.ndarray
+    blocked: np.ndarray
+    blocker: np.ndarray

@@ -1,0 +1,52 @@
+"""The TSWAP rules for movers that block each other (Okumura and Defago, AIJ 2023).
+
+Pure functions over robot indices and targets, so the rules can be tested on their own:
+
+- a mover blocked by a settled robot of its group swaps targets with it (the settled robot moves
+  on inward, the mover takes its cell), so a target walled in by others is passed inward;
+- movers at rest that wait for each other in a ring pass their targets one step round the ring,
+  which shortens every trip, so a deadlock cycle dissolves.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def ring_members(waiting: np.ndarray, waited_for: np.ndarray, robots: int) -> np.ndarray:
+    """Robots on rings of the "waits for" graph, where ``waiting[k]`` waits for ``waited_for[k]``.
+
+    Pointer doubling: after more jumps than there are waiting robots every walk has either run
+    out (-1) or is going round a ring, and the places the walks reach are the ring members.
+    """
+    next_of = np.full(robots + 1, -1)  # the extra last slot keeps -1 at -1
+    next_of[waiting] = waited_for
+    jump = next_of.copy()
+    for _ in range(len(waiting).bit_length()):
+        jump = jump[jump]
+    reached = jump[waiting]
+    return np.unique(reached[reached >= 0])
+
+
+def rotate_rings(
+    target: np.ndarray, waiting: np.ndarray, waited_for: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(receivers, targets)``: on every ring, each robot hands its target to the robot it
+    waits for; apply with ``target[receivers] = targets``.
+
+    The robot waited for stands in the way to the waiting robot's target, one cell closer to
+    it, so taking that target over shortens the trip (TSWAP's rotation).
+    """
+    if len(waiting) < 2:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=target.dtype)
+    members = ring_members(waiting, waited_for, len(target))
+    waits_for = np.full(len(target), -1)
+    waits_for[waiting] = waited_for
+    return waits_for[members], target[members]
+
+
+def settled_swaps(movers: np.ndarray, settled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(movers, settled)`` pairs that swap targets: each settled robot with the first mover
+    blocked by it, so no robot takes part in two swaps in one step."""
+    _, first = np.unique(settled, return_index=True)
+    return movers[first], settled[first]

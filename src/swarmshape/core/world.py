@@ -1,0 +1,227 @@
+"""The arena and what is fixed in it: each group's target cells and seed robots.
+
+World cells are integer ``(x, y)``, y growing downward; grids over the arena are indexed
+``[x, y]`` with shape ``(width, height)``, the layout pygame's surfarray uses too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.errors import InputError
+
+MARGIN = 3
+"""Free cells kept around everything placed, so agents can always pass around it."""
+
+ROOM_PER_AGENT = 5
+"""An automatic arena has this many free cells per agent, so waiting agents stay sparse."""
+
+ASPECT = 1.6
+"""Automatic arenas are at least this much wider than tall, to fill a landscape window."""
+
+GROUP_GAP = 4
+
+MAX_AGENTS = 1_000_000
+MAX_ARENA_CELLS = 25_000_000
+"""Caps that keep memory bounded (a million agents need about a gigabyte all told)."""
+
+
+class WorldError(InputError):
+    """A layout that cannot be built; the message says what to change."""
+
+
+@dataclass(frozen=True, eq=False)
+class GroupSpec:
+    """One group as a scenario describes it, before fitting and placement."""
+
+    name: str
+    shape: Shape
+    colour: tuple[int, int, int]
+    agents: int | None = None
+    pose: Pose | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Group:
+    """A placed group: its fitted shape, its world target cells and its seeds."""
+
+    name: str
+    colour: tuple[int, int, int]
+    shape: Shape
+    pose: Pose
+    agents: int
+    frame_cells: np.ndarray
+    targets: np.ndarray
+    seeds: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """All groups in one arena of ``size = (width, height)`` cells, and what the run is called."""
+
+    size: tuple[int, int]
+    groups: tuple[Group, ...]
+    name: str = "swarm"
+    targets: np.ndarray = field(init=False)
+    target_group: np.ndarray = field(init=False)
+    seeds: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "targets", np.concatenate([g.targets for g in self.groups]))
+        sizes = [len(g.targets) for g in self.groups]
+        object.__setattr__(self, "target_group", np.repeat(np.arange(len(sizes)), sizes))
+        object.__setattr__(self, "seeds", np.concatenate([g.seeds for g in self.groups]))
+
+    @property
+    def agents(self) -> int:
+        return sum(g.agents for g in self.groups)
+
+    def reshaped(self, group: int, shape: Shape, pose: Pose) -> World:
+        """The same arena with one group's shape (and seed pose) replaced; checked as new."""
+        old = self.groups[group]
+        placed = Group(
+            old.name,
+            old.colour,
+            shape,
+            pose,
+            old.agents,
+            shape.cells,
+            pose.to_world(shape.cells),
+            pose.to_world(SEED_CELLS),
+        )
+        groups = list(self.groups)
+        groups[group] = placed
+        world = World(self.size, tuple(groups), self.name)
+        _validate(world, starts=False)
+        return world
+
+    def mask(self, cells: np.ndarray) -> np.ndarray:
+        """A ``(width, height)`` boolean grid, True at `cells`."""
+        grid = np.zeros(self.size, dtype=bool)
+        grid[cells[:, 0], cells[:, 1]] = True
+        return grid
+
+    def outside(self) -> np.ndarray:
+        """Free cells connected to the arena border: where agents can come from."""
+        free = ~(self.mask(self.targets) | self.mask(self.seeds))
+        labels, _ = ndimage.label(free)
+        border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+        return np.isin(labels, border[border > 0])
+
+    def start_cells(self) -> np.ndarray:
+        """Cells where agents may start: outside, and not touching a target or a seed."""
+        placed = ndimage.binary_dilation(
+            self.mask(self.targets) | self.mask(self.seeds), structure=np.ones((3, 3))
+        )
+        return np.argwhere(self.outside() & ~placed)
+
+
+def blank_world(
+    size: tuple[int, int], pose: Pose, name: str, colour: tuple[int, int, int]
+) -> World:
+    """An arena with one group's seeds and no shape yet: the editor's empty canvas."""
+    empty = np.zeros((0, 2), dtype=np.int64)
+    seeds = pose.to_world(SEED_CELLS)
+    group = Group(name, colour, Shape(np.zeros((0, 0), dtype=bool)), pose, 0, empty, empty, seeds)
+    return World(size, (group,), name)
+
+
+def build_world(
+    specs: list[GroupSpec], arena: tuple[int, int] | None = None, name: str = "swarm"
+) -> World:
+    """Fit every group's shape to its agents, place it, and size the arena if not given."""
+    if not specs:
+        raise WorldError("a scenario needs at least one group")
+    groups = _place(specs)
+    if arena is None:
+        groups, arena = _auto_arena(groups)
+    world = World(arena, tuple(groups), name)
+    _validate(world)
+    return world
+
+
+def _place(specs: list[GroupSpec]) -> list[Group]:
+    groups, next_x = [], 0
+    for spec in specs:
+        agents = spec.shape.count if spec.agents is None else spec.agents
+        if agents < 1:
+            raise WorldError(f"group {spec.name!r}: agents must be at least 1, got {agents}")
+        if agents > MAX_AGENTS:
+            raise WorldError(
+                f"group {spec.name!r}: {agents:,} agents is more than the {MAX_AGENTS:,} "
+                "swarmshape simulates; lower --agents or --cells"
+            )
+        shape = spec.shape.fitted(agents)
+        pose = spec.pose
+        if pose is None:  # side by side, left to right, each seed frame at its shape's corner
+            pose = Pose(next_x + 1, 1)
+            next_x += 1 + shape.grid.shape[1] + GROUP_GAP
+        frame = shape.cells
+        groups.append(
+            Group(
+                spec.name,
+                spec.colour,
+                shape,
+                pose,
+                agents,
+                frame,
+                pose.to_world(frame),
+                pose.to_world(SEED_CELLS),
+            )
+        )
+    return groups
+
+
+def _auto_arena(groups: list[Group]) -> tuple[list[Group], tuple[int, int]]:
+    """Shift everything to a margin from the origin and grow the arena to room and aspect."""
+    placed = np.concatenate([np.concatenate([g.targets, g.seeds]) for g in groups])
+    low, high = placed.min(axis=0), placed.max(axis=0) + 1
+    width, height = (high - low) + 2 * MARGIN
+    needed = len(placed) + ROOM_PER_AGENT * sum(g.agents for g in groups)
+    while width * height < needed or width < ASPECT * height:
+        if width < ASPECT * height:
+            width += 1
+        else:
+            height += 1
+    offset = MARGIN - low + (np.array([width, height]) - (high - low) - 2 * MARGIN) // 2
+    moved = [
+        Group(
+            g.name,
+            g.colour,
+            g.shape,
+            Pose(g.pose.x + int(offset[0]), g.pose.y + int(offset[1]), g.pose.rotation),
+            g.agents,
+            g.frame_cells,
+            g.targets + offset,
+            g.seeds + offset,
+        )
+        for g in groups
+    ]
+    return moved, (int(width), int(height))
+
+
+def _validate(world: World, *, starts: bool = True) -> None:
+    width, height = world.size
+    if width < 1 or height < 1:
+        raise WorldError(f"arena must be at least 1x1 cells, got {width}x{height}")
+    if width * height > MAX_ARENA_CELLS:
+        raise WorldError(
+            f"arena {width}x{height} is larger than {MAX_ARENA_CELLS:,} cells; make it smaller"
+        )
+    for group in world.groups:
+        cells = np.concatenate([group.targets, group.seeds])
+        if (cells < 0).any() or (cells >= np.array(world.size)).any():
+            raise WorldError(
+                f"group {group.name!r}: shape or seeds fall outside the {width}x{height} arena"
+            )
+    everything = np.concatenate([world.targets, world.seeds])
+    if len(np.unique(everything, axis=0)) < len(everything):
+        raise WorldError("groups overlap: two shapes or seed sets share a cell; move a seed pose")
+    if starts and len(world.start_cells()) < world.agents:
+        raise WorldError(
+            f"arena {width}x{height} has no room to start {world.agents} agents; enlarge the arena"
+        )

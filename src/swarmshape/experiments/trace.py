@@ -1,0 +1,72 @@
+"""Per-step traces: one CSV row every few steps, with the same figures as the metrics file.
+
+Rows go to a temporary file beside the target as the run goes (a crash loses nothing already
+written there) and it takes the target's name only when the run ends.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from swarmshape.core.metrics import coverage, iou
+from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
+from swarmshape.core.swarm import Swarm
+from swarmshape.errors import InputError
+from swarmshape.io.files import umask
+
+COUNTS = {"moving": MOVING, "settled": SETTLED, "waiting": WAITING, "wandering": WANDERING}
+
+
+def trace_row(swarm: Swarm) -> dict[str, Any]:
+    """The run's figures now: totals, then the same per group (``NAME.figure``)."""
+    row: dict[str, Any] = {
+        "step": swarm.step_count,
+        "coverage": coverage(swarm),
+        "iou": iou(swarm),
+        **{name: int((swarm.state == state).sum()) for name, state in COUNTS.items()},
+        "messages": swarm.driver.messages_sent,
+        "overlaps": int(swarm.overlap_total),
+    }
+    for g, placed in enumerate(swarm.world.groups):
+        mine = swarm.group == g
+        row[f"{placed.name}.coverage"] = coverage(swarm, g)
+        row[f"{placed.name}.iou"] = iou(swarm, g)
+        for name, state in COUNTS.items():
+            row[f"{placed.name}.{name}"] = int((mine & (swarm.state == state)).sum())
+        row[f"{placed.name}.overlaps"] = int(swarm.overlaps[g])
+    return row
+
+
+class Trace:
+    """Writes `trace_row` every `every` steps, and always for the last step."""
+
+    def __init__(self, path: Path, every: int = 1) -> None:
+        if every < 1:
+            raise InputError(f"--trace-every must be at least 1, got {every}")
+        self.path, self.every = Path(path), every
+        folder, stem = self.path.parent, self.path.stem
+        fd, self._tmp = tempfile.mkstemp(dir=folder, prefix=f".{stem}.", suffix=".csv")
+        self._file = os.fdopen(fd, "w", newline="", encoding="utf-8")
+        self._writer: csv.DictWriter | None = None
+        self._last = -1
+
+    def capture(self, swarm: Swarm, *, force: bool = False) -> None:
+        if swarm.step_count == self._last or (swarm.step_count % self.every and not force):
+            return
+        row = trace_row(swarm)
+        if self._writer is None:
+            self._writer = csv.DictWriter(self._file, fieldnames=list(row))
+            self._writer.writeheader()
+        self._writer.writerow(row)
+        self._last = swarm.step_count
+
+    def close(self, swarm: Swarm) -> None:
+        """Write the final row and give the file its name."""
+        self.capture(swarm, force=True)
+        self._file.close()
+        os.chmod(self._tmp, 0o666 & ~umask())
+        os.replace(self._tmp, self.path)

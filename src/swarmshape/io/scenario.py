@@ -1,0 +1,219 @@
+"""What to run: an image or a TOML scenario, read into one frozen `Scenario`.
+
+A TOML scenario names its shapes relative to its own folder::
+
+    strategy = "paper"        # optional, like every top-level key
+    order = "outward"
+    seed = 7
+    arena = [40, 24]          # width, height in cells; automatic when left out
+
+    [[groups]]
+    name = "blue"
+    shape = "small-square.png"
+    agents = 36               # default: one per cell of the shape
+    colour = "#3a6fd8"
+    pose = { x = 6, y = 5, rotation = 0 }   # seed frame origin; rotation in quarter turns
+
+An image is a scenario with one group named after the file.
+"""
+
+from __future__ import annotations
+
+import csv
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PIL import ImageColor
+
+from swarmshape.core.shape import Pose, Shape
+from swarmshape.core.world import GroupSpec, World
+from swarmshape.errors import InputError
+from swarmshape.io.bitmap import DEFAULT_CELLS, DEFAULT_THRESHOLD, load_grid
+
+PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
+"""Group colours in order; none of them green (seeds) or grey (targets)."""
+
+TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel"}
+GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
+POSE_KEYS = {"x", "y", "rotation"}
+
+
+class ScenarioError(InputError):
+    """A scenario file that cannot be used; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class ImageOptions:
+    """How images become grids (the loader's knobs)."""
+
+    cells: int = DEFAULT_CELLS
+    threshold: float = DEFAULT_THRESHOLD
+    invert: bool = False
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """The groups to form and the arena; the file's run settings come from `scenario_settings`."""
+
+    name: str
+    groups: tuple[GroupSpec, ...]
+    arena: tuple[int, int] | None = None
+
+
+def load_scenario(path: str | Path, image: ImageOptions | None = None) -> Scenario:
+    """Read an image (one group) or a ``.toml`` scenario."""
+    path = Path(path)
+    image = image or ImageOptions()
+    if path.suffix.lower() != ".toml":
+        grid = load_grid(path, cells=image.cells, threshold=image.threshold, invert=image.invert)
+        return Scenario(path.name, (GroupSpec(path.stem, Shape(grid), parse_colour(PALETTE[0])),))
+    data, where = _read_toml(path)
+    _settings(data, where)  # a mistyped setting is an error wherever the file is read
+    groups = data.get("groups")
+    if not isinstance(groups, list) or not groups:
+        raise ScenarioError(f"{path}: needs at least one [[groups]] table with a shape")
+    specs = tuple(_group(where, index, table, image) for index, table in enumerate(groups))
+    arena = None
+    if "arena" in data:
+        arena = where.pair(data["arena"], "arena")
+    return Scenario(str(data.get("name", path.name)), specs, arena)
+
+
+def scenario_settings(path: str | Path) -> dict[str, Any]:
+    """The run settings a scenario file sets (none for an image), without loading its shapes."""
+    path = Path(path)
+    if path.suffix.lower() != ".toml":
+        return {}
+    return _settings(*_read_toml(path))
+
+
+def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
+    if not path.is_file():
+        raise ScenarioError(f"{path}: no such file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise ScenarioError(f"{path}: not valid TOML ({error})") from None
+    where = _Where(path)
+    where.known(data, TOP_KEYS | {"groups"}, "top level")
+    return data, where
+
+
+def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
+    """Optional top-level values, checked for type."""
+    settings = {key: data[key] for key in TOP_KEYS - {"name", "arena"} if key in data}
+    for key, kind in (("strategy", str), ("order", str), ("seed", int), ("max_steps", int)):
+        if key in settings:
+            where.typed(settings[key], kind, key)
+    for key in ("max_speed", "max_accel"):
+        if key in settings:
+            settings[key] = float(where.typed(settings[key], (int, float), key))
+    return settings
+
+
+def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupSpec:
+    label = f"groups[{index}]"
+    if not isinstance(table, dict):
+        raise ScenarioError(f"{where.path}: {label} must be a table")
+    where.known(table, GROUP_KEYS, label)
+    if "shape" not in table:
+        raise ScenarioError(f"{where.path}: {label} needs a shape (an image path)")
+    shape_path = where.path.parent / where.typed(table["shape"], str, f"{label}.shape")
+    grid = load_grid(
+        shape_path,
+        cells=where.typed(table.get("cells", image.cells), int, f"{label}.cells"),
+        threshold=float(
+            where.typed(table.get("threshold", image.threshold), (int, float), f"{label}.threshold")
+        ),
+        invert=where.typed(table.get("invert", image.invert), bool, f"{label}.invert"),
+    )
+    agents = table.get("agents")
+    if agents is not None:
+        agents = where.typed(agents, int, f"{label}.agents")
+    colour = where.typed(table.get("colour", PALETTE[index % len(PALETTE)]), str, f"{label}.colour")
+    try:
+        rgb = parse_colour(colour)
+    except ValueError:
+        raise ScenarioError(f"{where.path}: {label}.colour {colour!r} is not a colour") from None
+    pose = None
+    if "pose" in table:
+        pose_table = table["pose"]
+        if not isinstance(pose_table, dict):
+            raise ScenarioError(f"{where.path}: {label}.pose must be a table like {{x = 0, y = 0}}")
+        where.known(pose_table, POSE_KEYS, f"{label}.pose")
+        values = {k: where.typed(v, int, f"{label}.pose.{k}") for k, v in pose_table.items()}
+        pose = Pose(**values)
+    name = where.typed(table.get("name", f"group {index + 1}"), str, f"{label}.name")
+    return GroupSpec(name, Shape(grid), rgb, agents, pose)
+
+
+def parse_colour(colour: str) -> tuple[int, int, int]:
+    red, green, blue = ImageColor.getrgb(colour)[:3]
+    return red, green, blue
+
+
+@dataclass(frozen=True)
+class _Where:
+    """Checks that name the file and key in their messages."""
+
+    path: Path
+
+    def known(self, table: dict, allowed: set[str], label: str) -> None:
+        unknown = sorted(set(table) - allowed)
+        if unknown:
+            raise ScenarioError(
+                f"{self.path}: unknown key {unknown[0]!r} in {label}; "
+                f"expected one of {', '.join(sorted(allowed))}"
+            )
+
+    def typed(self, value: Any, kind: type | tuple[type, ...], key: str) -> Any:
+        is_bool = isinstance(value, bool)
+        wants_bool = kind is bool or (isinstance(kind, tuple) and bool in kind)
+        if not isinstance(value, kind) or (is_bool and not wants_bool):
+            names = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+            raise ScenarioError(f"{self.path}: {key} must be {names}, got {value!r}")
+        return value
+
+    def pair(self, value: Any, key: str) -> tuple[int, int]:
+        ok = isinstance(value, list) and len(value) == 2
+        if not ok or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+            raise ScenarioError(f"{self.path}: {key} must be two integers [width, height]")
+        return value[0], value[1]
+
+
+def read_start_cells(path: Path, world: World) -> np.ndarray:
+    """Start cells ``(agents, 2)`` from a CSV with columns ``x,y`` (one row per agent, groups
+    in scenario order): free arena cells, none on a shape or a seed, no two alike."""
+    path = Path(path)
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            rows = list(csv.DictReader(handle))
+    except OSError as error:
+        raise InputError(f"{path}: cannot read start positions ({error.strerror})") from None
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise InputError(f"{path}: not a CSV of start positions ({error})") from None
+    try:
+        cells = np.array([[int(row["x"]), int(row["y"])] for row in rows], dtype=np.int64)
+    except (KeyError, TypeError, ValueError):
+        raise InputError(f"{path}: needs integer columns x,y (cells), one row per agent") from None
+    if len(cells) != world.agents:
+        raise InputError(f"{path}: {len(cells)} start positions for {world.agents} agents")
+    allowed = np.zeros(world.size, dtype=bool)
+    free = world.start_cells()
+    allowed[free[:, 0], free[:, 1]] = True
+    inside = (cells >= 0).all(axis=1) & (cells < np.array(world.size)).all(axis=1)
+    ok = np.zeros(len(cells), dtype=bool)
+    ok[inside] = allowed[cells[inside, 0], cells[inside, 1]]
+    bad = np.flatnonzero(~ok)
+    if len(bad):
+        x, y = cells[bad[0]]
+        raise InputError(
+            f"{path}: row {bad[0] + 2} ({x},{y}) is not a free start cell "
+            "(outside the arena, or on or next to a shape or a seed)"
+        )
+    if len(np.unique(cells, axis=0)) < len(cells):
+        raise InputError(f"{path}: two agents start on the same cell")
+    return cells

@@ -1,0 +1,344 @@
+"""Click-to-paint shape editor: pure grid operations (`Canvas`) and their mouse and keys (`Editor`).
+
+The canvas is the arena itself, cell for cell ``[x, y]``, so a user paints right where the swarm
+will form the shape; the seed frame is drawn over it and can be dragged or turned, taking the
+drawing along. `Editor.shape` turns the painting into a shape in the seed frame.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pygame
+from scipy import ndimage
+
+from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.io.bitmap import save_grid
+
+HISTORY = 200
+"""Undo steps kept."""
+
+MAX_BRUSH = 9
+PAINT = (240, 170, 40)
+CURSOR = (20, 20, 20)
+HELP_LINES = (
+    "left paint   right erase   drag: strokes   [ ] brush   f fill   c clear",
+    "Ctrl+Z undo   Ctrl+Y redo   Ctrl+S save   Ctrl+Shift+S save as   t turn seeds",
+    "drag a green seed to move the frame   PgUp/PgDn grid size (before a run)",
+    "Enter or e: hand the shape to the swarm   h this help",
+)
+
+
+class Canvas:
+    """A boolean grid ``[x, y]`` with brush strokes, flood fill, clear and undo/redo.
+
+    Cells in `blocked` (the seeds, other groups' shapes) are never painted.
+    """
+
+    def __init__(self, size: tuple[int, int], cells: np.ndarray | None = None) -> None:
+        self.grid = np.zeros(size, dtype=bool)
+        self.blocked = np.zeros(size, dtype=bool)
+        if cells is not None and len(cells):
+            self.grid[cells[:, 0], cells[:, 1]] = True
+        self._undo: deque[np.ndarray] = deque(maxlen=HISTORY)
+        self._redo: list[np.ndarray] = []
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.grid.shape
+
+    @property
+    def cells(self) -> np.ndarray:
+        return np.argwhere(self.grid)
+
+    def checkpoint(self) -> None:
+        """Remember the grid as it is, as one undo step (call before each edit)."""
+        self._undo.append(self.grid.copy())
+        self._redo.clear()
+
+    def undo(self) -> bool:
+        if not self._undo:
+            return False
+        self._redo.append(self.grid)
+        self.grid = self._undo.pop()
+        return True
+
+    def redo(self) -> bool:
+        if not self._redo:
+            return False
+        self._undo.append(self.grid)
+        self.grid = self._redo.pop()
+        return True
+
+    def stroke(self, start: tuple[int, int], end: tuple[int, int], brush: int, ink: bool) -> None:
+        """Paint (or erase) every cell a square brush covers on its way from start to end."""
+        steps = max(abs(end[0] - start[0]), abs(end[1] - start[1])) + 1
+        xs = np.rint(np.linspace(start[0], end[0], steps)).astype(int)
+        ys = np.rint(np.linspace(start[1], end[1], steps)).astype(int)
+        offsets = np.arange(brush) - (brush - 1) // 2
+        dx, dy = (grid.ravel() for grid in np.meshgrid(offsets, offsets, indexing="ij"))
+        xs = (xs[:, None] + dx[None, :]).ravel()
+        ys = (ys[:, None] + dy[None, :]).ravel()
+        inside = (xs >= 0) & (xs < self.size[0]) & (ys >= 0) & (ys < self.size[1])
+        xs, ys = xs[inside], ys[inside]
+        free = ~self.blocked[xs, ys]
+        self.grid[xs[free], ys[free]] = ink
+
+    def fill(self, cell: tuple[int, int]) -> None:
+        """Flip the region of equal cells around `cell` (4-connected): ink becomes empty, and
+        an empty region becomes ink."""
+        same = self.grid == self.grid[cell]
+        labels, _ = ndimage.label(same & ~self.blocked)
+        if labels[cell]:
+            self.grid[labels == labels[cell]] = not self.grid[cell]
+
+    def clear(self) -> None:
+        self.grid[...] = False
+
+    def resize(self, size: tuple[int, int]) -> None:
+        """A larger or smaller grid that keeps what fits, anchored top-left."""
+        grown = np.zeros(size, dtype=bool)
+        width, height = min(size[0], self.size[0]), min(size[1], self.size[1])
+        grown[:width, :height] = self.grid[:width, :height]
+        self.grid = grown
+        self.blocked = np.zeros(size, dtype=bool)
+
+    def remap(self, move: Callable[[np.ndarray], np.ndarray]) -> bool:
+        """Move every painted cell with `move`, unless one would leave the grid or land on a
+        blocked cell; return whether it moved."""
+        moved = move(self.cells)
+        inside = (moved >= 0).all(axis=1) & (moved < np.array(self.size)).all(axis=1)
+        if not inside.all() or self.blocked[moved[:, 0], moved[:, 1]].any():
+            return False
+        self.grid = np.zeros(self.size, dtype=bool)
+        self.grid[moved[:, 0], moved[:, 1]] = True
+        return True
+
+
+class Editor:
+    """Mouse and keys on a `Canvas`, the seed pose, and saving; drawn over the arena."""
+
+    def __init__(
+        self,
+        canvas: Canvas,
+        pose: Pose,
+        *,
+        path: Path | None,
+        agents: int | None,
+        resizable: bool,
+        fixed: np.ndarray,
+    ) -> None:
+        self.canvas = canvas
+        self.pose = pose
+        self.path = path
+        self.agents = agents
+        self.resizable = resizable
+        self.fixed = fixed
+        """Cells of other groups (shapes and seeds) that this group must keep off."""
+        self.brush = 1
+        self.cursor: tuple[int, int] | None = None
+        self.dirty = False
+        self.naming: str | None = None
+        self.show_help = False
+        self.message = ""
+        self._ink: bool | None = None
+        self._last: tuple[int, int] | None = None
+        self._dragging_from: tuple[int, int] | None = None
+        self._block_seeds()
+
+    # --- reading ------------------------------------------------------------------------
+
+    @property
+    def seeds(self) -> np.ndarray:
+        return self.pose.to_world(SEED_CELLS)
+
+    def shape(self) -> Shape | None:
+        """The painting as a shape in the seed frame (None while nothing is painted)."""
+        cells = self.canvas.cells
+        return Shape.from_cells(self.pose.to_frame(cells)) if len(cells) else None
+
+    def status(self) -> str:
+        width, height = self.canvas.size
+        count = int(self.canvas.grid.sum())
+        agents = "" if self.agents is None else f"   agents {self.agents}"
+        if self.agents is not None and count > self.agents:
+            agents += f" (short by {count - self.agents})"
+        name = self.path.name if self.path else "untitled"
+        return (
+            f"EDIT {name}{'*' if self.dirty else ''}   grid {width}x{height}   "
+            f"brush {self.brush}   cells {count}{agents}"
+        )
+
+    # --- events -------------------------------------------------------------------------
+
+    def handle(self, event: pygame.event.Event, cell_at: Callable) -> str | None:
+        """Apply one event; return "apply" when the user hands the shape over."""
+        if self.naming is not None:
+            return self._type_name(event)
+        if event.type == pygame.MOUSEMOTION:
+            self.cursor = cell_at(event.pos)
+            if self.cursor is not None:
+                self._drag_to(self.cursor)
+        elif event.type == pygame.MOUSEBUTTONDOWN and event.button in (1, 3):
+            self.cursor = cell_at(event.pos)
+            if self.cursor is not None:
+                self._press(self.cursor, ink=event.button == 1)
+        elif event.type == pygame.MOUSEBUTTONUP and event.button in (1, 3):
+            self._ink = self._last = self._dragging_from = None
+        elif event.type == pygame.KEYDOWN:
+            return self._key(event)
+        return None
+
+    def _press(self, cell: tuple[int, int], *, ink: bool) -> None:
+        if ink and any(tuple(seed) == cell for seed in self.seeds.tolist()):
+            self._dragging_from = cell
+            return
+        self.canvas.checkpoint()
+        self._ink, self._last = ink, cell
+        self._paint(cell)
+
+    def _drag_to(self, cell: tuple[int, int]) -> None:
+        if self._dragging_from is not None:
+            dx, dy = cell[0] - self._dragging_from[0], cell[1] - self._dragging_from[1]
+            if dx or dy:
+                self._move_frame(Pose(self.pose.x + dx, self.pose.y + dy, self.pose.rotation))
+                self._dragging_from = cell
+        elif self._ink is not None:
+            self._paint(cell)
+
+    def _paint(self, cell: tuple[int, int]) -> None:
+        self.canvas.stroke(self._last or cell, cell, self.brush, bool(self._ink))
+        self._last = cell
+        self.dirty = True
+
+    def _key(self, event: pygame.event.Event) -> str | None:
+        key, ctrl, shift = event.key, event.mod & pygame.KMOD_CTRL, event.mod & pygame.KMOD_SHIFT
+        if key in (pygame.K_RETURN, pygame.K_KP_ENTER, pygame.K_e):
+            return "apply"
+        if ctrl and key == pygame.K_z:
+            self.dirty |= self.canvas.undo()
+        elif ctrl and key == pygame.K_y:
+            self.dirty |= self.canvas.redo()
+        elif ctrl and key == pygame.K_s:
+            if shift or self.path is None:
+                self.naming = self.path.name if self.path else "shape.png"
+            else:
+                self.save(self.path)
+        elif key == pygame.K_LEFTBRACKET:
+            self.brush = max(1, self.brush - 1)
+        elif key == pygame.K_RIGHTBRACKET:
+            self.brush = min(MAX_BRUSH, self.brush + 1)
+        elif key == pygame.K_c:
+            self._edit(self.canvas.clear)
+        elif key == pygame.K_f and self.cursor is not None:
+            self._edit(lambda: self.canvas.fill(self.cursor))
+        elif key == pygame.K_t:
+            self._move_frame(Pose(self.pose.x, self.pose.y, (self.pose.rotation + 90) % 360))
+        elif key in (pygame.K_PAGEUP, pygame.K_PAGEDOWN):
+            self._resize(4 if key == pygame.K_PAGEUP else -4)
+        elif key == pygame.K_h:
+            self.show_help = not self.show_help
+        return None
+
+    def _edit(self, change: Callable[[], None]) -> None:
+        self.canvas.checkpoint()
+        change()
+        self.dirty = True
+
+    def _move_frame(self, pose: Pose) -> None:
+        """Move or turn the seed frame; the drawing goes along with it."""
+        seeds = pose.to_world(SEED_CELLS)
+        width, height = self.canvas.size
+        if (seeds < 0).any() or (seeds >= np.array([width, height])).any():
+            self.message = "the seeds must stay inside the grid"
+            return
+        old = self.pose
+        self.canvas.checkpoint()
+        self.canvas.blocked[...] = False  # the seeds' own cells move along
+        moved = self.canvas.remap(lambda cells: pose.to_world(old.to_frame(cells)))
+        if moved:
+            self.pose = pose
+            self.dirty = True
+        self.message = "" if moved else "no room there for the drawing; move the seeds first"
+        self._block_seeds()
+
+    def _resize(self, by: int) -> None:
+        if not self.resizable:
+            self.message = "the grid size is fixed while a swarm runs on it"
+            return
+        width, height = self.canvas.size
+        size = (max(8, width + by), max(6, height + round(by * height / width)))
+        self._edit(lambda: self.canvas.resize(size))
+        self.fixed = np.zeros((0, 2), dtype=np.int64)
+        self._block_seeds()
+
+    def _block_seeds(self) -> None:
+        self.canvas.blocked[...] = False
+        for cells in (self.seeds, self.fixed):
+            inside = (cells >= 0).all(axis=1) & (cells < np.array(self.canvas.size)).all(axis=1)
+            self.canvas.blocked[cells[inside, 0], cells[inside, 1]] = True
+        self.canvas.grid &= ~self.canvas.blocked
+
+    def _type_name(self, event: pygame.event.Event) -> None:
+        """The in-window text field of "save as"."""
+        if event.type != pygame.KEYDOWN:
+            return
+        if event.key == pygame.K_ESCAPE:
+            self.naming = None
+        elif event.key in (pygame.K_RETURN, pygame.K_KP_ENTER):
+            name, self.naming = self.naming.strip(), None
+            if name:
+                path = Path(name if name.lower().endswith(".png") else f"{name}.png")
+                self.save(path)
+        elif event.key == pygame.K_BACKSPACE:
+            self.naming = self.naming[:-1]
+        elif event.unicode and event.unicode.isprintable():
+            self.naming += event.unicode
+
+    # --- files --------------------------------------------------------------------------
+
+    def save(self, path: Path) -> bool:
+        """Save the shape to `path`, which becomes the file being edited."""
+        if not self._write(path):
+            return False
+        self.path, self.dirty = path, False
+        return True
+
+    def autosave(self) -> Path | None:
+        """Keep unsaved work beside the file (or here) as NAME.autosave.png; return where."""
+        if not self.dirty or self.shape() is None:
+            return None
+        stem = self.path.stem if self.path else "untitled"
+        target = (self.path.parent if self.path else Path()) / f"{stem}.autosave.png"
+        return target if self._write(target) else None
+
+    def _write(self, path: Path) -> bool:
+        """Write the shape (as seen from the seeds) atomically; say how it went."""
+        shape = self.shape()
+        if shape is None:
+            self.message = "nothing to save: paint some cells first"
+            return False
+        try:
+            save_grid(shape.grid, path)
+        except OSError as error:
+            self.message = f"not saved: {error}"
+            return False
+        self.message = f"saved {path}"
+        return True
+
+    # --- drawing ------------------------------------------------------------------------
+
+    def draw(self, surface: pygame.Surface, cell_rect: Callable) -> None:
+        """Painted cells, the brush under the cursor, and the seed frame, over the arena."""
+        for x, y in self.canvas.cells.tolist():
+            surface.fill(PAINT, cell_rect((x, y)).inflate(-2, -2))
+        if self.cursor is not None:
+            half = (self.brush - 1) // 2
+            corner = cell_rect((self.cursor[0] - half, self.cursor[1] - half))
+            brush = pygame.Rect(corner.topleft, (corner.width * self.brush,) * 2)
+            pygame.draw.rect(surface, CURSOR, brush.inflate(2, 2), width=2)
+        for x, y in self.seeds.tolist():
+            pygame.draw.rect(surface, CURSOR, cell_rect((x, y)), width=1)

@@ -1,0 +1,261 @@
+"""The window: main loop, keys, heads-up display, screenshots, and the editor on top.
+
+Each call of `Viewer.tick` handles pending events, advances the simulation by the current
+speed, and draws one frame, so tests can post events and drive it frame by frame under
+``SDL_VIDEODRIVER=dummy``. `e` switches into the editor while the swarm keeps running; Enter
+(or `e` again) hands the painted shape to the swarm, or starts one if none runs yet.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Sequence
+from math import ceil
+from pathlib import Path
+
+import numpy as np
+import pygame
+
+from swarmshape.core.states import SETTLED
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, World, build_world
+from swarmshape.errors import InputError
+from swarmshape.io.files import atomic_write
+from swarmshape.ui.editor import HELP_LINES, Canvas, Editor
+from swarmshape.ui.render import Renderer
+
+SPEEDS = (0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256)
+"""Simulation steps per frame that `+` and `-` move between."""
+
+SPARE_WHEN_PAINTED = 0.25
+"""A swarm started from a painting gets this share of spare robots, to recruit on re-edits."""
+
+HUD_HEIGHT = 48
+HUD_BACK = (38, 40, 46)
+HUD_TEXT = (235, 235, 235)
+HUD_DIM = (150, 155, 165)
+HELP = "Space pause   . step   + - speed   r restart   e edit   F12 screenshot   q quit"
+
+
+class Viewer:
+    """A resizable window on one world; `make_swarm` builds (and on `r` rebuilds) its run.
+
+    With ``start=False`` the window opens in the editor and no swarm runs until the user
+    hands over a shape.
+    """
+
+    def __init__(
+        self,
+        make_swarm: Callable[[World], Swarm],
+        world: World,
+        *,
+        title: str,
+        start: bool = True,
+        shape_file: Path | None = None,
+        size: tuple[int, int] = (1280, 800),
+        speed: float = 8,
+        fps: int = 60,
+        screenshots: Path = Path(),
+        observers: Sequence = (),
+    ) -> None:
+        pygame.display.init()  # not pygame.init(): no sound, so no audio device needed
+        pygame.font.init()
+        pygame.display.set_caption(f"swarmshape - {title}")
+        self.screen = pygame.display.set_mode(size, pygame.RESIZABLE)
+        self.font = pygame.font.Font(None, 22)
+        self.clock = pygame.time.Clock()
+        self.title = title
+        self.make_swarm = make_swarm
+        self.world = world
+        self.swarm = make_swarm(world) if start else None
+        self.renderer = Renderer(world)
+        self.speed_index = min(range(len(SPEEDS)), key=lambda i: abs(SPEEDS[i] - speed))
+        self.fps = fps
+        self.screenshots = screenshots
+        self.observers = observers
+        """Recorders and traces: each captures the swarm after every step."""
+        self.paused = False
+        self.running = True
+        self.notice = ""
+        self._budget = 0.0
+        self.editor: Editor | None = None
+        self.editing = False
+        self._shape_file = shape_file
+        if not start:
+            self.start_editing()
+
+    @property
+    def speed(self) -> float:
+        return SPEEDS[self.speed_index]
+
+    def run(self) -> None:
+        while self.tick():
+            pass
+        pygame.quit()
+
+    def tick(self) -> bool:
+        """One frame: events, simulation, drawing. Returns False once the user quit."""
+        for event in pygame.event.get():
+            self.handle(event)
+        if not self.paused and self.swarm is not None:
+            self._budget += self.speed
+            while self._budget >= 1:
+                self.step()
+                self._budget -= 1
+        self.draw()
+        pygame.display.flip()
+        self.clock.tick(self.fps)
+        return self.running
+
+    def handle(self, event: pygame.event.Event) -> None:
+        if event.type == pygame.QUIT:
+            self.quit()
+        elif event.type == pygame.VIDEORESIZE:
+            self.screen = pygame.display.set_mode(event.size, pygame.RESIZABLE)
+        elif event.type == pygame.KEYDOWN and event.key == pygame.K_F12:
+            self.notice = f"saved {self.screenshot()}"
+        elif self.editing:
+            if self.editor.handle(event, self.cell_at) == "apply":
+                self.finish_editing()
+        elif event.type == pygame.KEYDOWN:
+            self._key(event)
+
+    def _key(self, event: pygame.event.Event) -> None:
+        key = event.key
+        if key in (pygame.K_ESCAPE, pygame.K_q):
+            self.quit()
+        elif key == pygame.K_SPACE:
+            self.paused = not self.paused
+        elif key == pygame.K_PERIOD and self.swarm is not None:
+            self.paused = True
+            self.step()
+        elif key in (pygame.K_PLUS, pygame.K_EQUALS, pygame.K_KP_PLUS):
+            self.speed_index = min(self.speed_index + 1, len(SPEEDS) - 1)
+        elif key in (pygame.K_MINUS, pygame.K_KP_MINUS):
+            self.speed_index = max(self.speed_index - 1, 0)
+        elif key == pygame.K_r and self.swarm is not None:
+            self.swarm = self.make_swarm(self.world)
+            self.notice = f"restarted with seed {self.swarm.seed}"
+        elif key == pygame.K_e:
+            self.start_editing()
+
+    def step(self) -> None:
+        self.swarm.step()
+        for observer in self.observers:
+            observer.capture(self.swarm)
+
+    def quit(self) -> None:
+        """Stop; a painting that was never saved is kept as NAME.autosave.png first."""
+        self.running = False
+        if self.editor is not None:
+            kept = self.editor.autosave()
+            if kept is not None:
+                print(f"swarmshape: unsaved shape kept in {kept}", file=sys.stderr)
+
+    # --- the editor ---------------------------------------------------------------------
+
+    def start_editing(self, group: int = 0) -> None:
+        """Paint over the arena; the swarm, if any, keeps running underneath."""
+        placed = self.world.groups[group]
+        others = [g for i, g in enumerate(self.world.groups) if i != group]
+        fixed = np.concatenate([np.zeros((0, 2), np.int64)] + [g.targets for g in others])
+        fixed = np.concatenate([fixed] + [g.seeds for g in others])
+        if self.editor is None:
+            self.editor = Editor(
+                Canvas(self.world.size, placed.targets),
+                placed.pose,
+                path=self._shape_file,
+                agents=None if self.swarm is None else placed.agents,
+                resizable=self.swarm is None,
+                fixed=fixed,
+            )
+        self.editing = True
+
+    def finish_editing(self, group: int = 0) -> None:
+        """Hand the painted shape over: re-form the running swarm, or start one."""
+        editor = self.editor
+        shape = editor.shape()
+        if shape is None:
+            editor.message = "paint some cells first"
+            return
+        try:
+            if self.swarm is None:
+                placed = self.world.groups[group]
+                agents = shape.count + ceil(SPARE_WHEN_PAINTED * shape.count)
+                spec = GroupSpec(placed.name, shape, placed.colour, agents, editor.pose)
+                self.world = build_world([spec], editor.canvas.size)
+                self.swarm = self.make_swarm(self.world)
+                editor.agents, editor.resizable = self.world.agents, False
+            else:
+                self.swarm.reshape(group, shape, editor.pose)
+                self.world = self.swarm.world
+        except InputError as error:
+            editor.message = str(error)
+            return
+        self.renderer = Renderer(self.world)
+        self.editing = False
+        self.notice = f"new shape: {len(self.world.groups[group].targets)} cells"
+
+    def cell_at(self, pixel: tuple[int, int]) -> tuple[int, int] | None:
+        """The world cell under a pixel, or None outside the arena."""
+        cell, (ox, oy) = self.renderer.fit(self._world_area())
+        x, y = (pixel[0] - ox) // cell, (pixel[1] - oy) // cell
+        width, height = self.world.size
+        return (x, y) if 0 <= x < width and 0 <= y < height else None
+
+    # --- drawing ------------------------------------------------------------------------
+
+    def screenshot(self) -> Path:
+        """Save the window as PNG (atomically) and return its path."""
+        step = 0 if self.swarm is None else self.swarm.step_count
+        stem = Path(self.title).stem.replace(" ", "-")
+        path = self.screenshots / f"swarmshape-{stem}-{step}.png"
+        atomic_write(path, lambda tmp: pygame.image.save(self.screen, tmp))
+        print(f"screenshot: {path}")
+        return path
+
+    def _world_area(self) -> pygame.Rect:
+        width, height = self.screen.get_size()
+        return pygame.Rect(0, HUD_HEIGHT, width, max(1, height - HUD_HEIGHT))
+
+    def draw(self) -> None:
+        area = self._world_area()
+        self.renderer.draw(self.screen, self.swarm, area)
+        if self.editing:
+            self.editor.draw(self.screen, lambda cell: self.renderer.cell_rect(cell, area))
+            if self.editor.show_help:
+                panel = pygame.Rect(area.x + 8, area.y + 8, 640, 22 * len(HELP_LINES) + 10)
+                self.screen.fill(HUD_BACK, panel)
+                for row, line in enumerate(HELP_LINES):
+                    self._text(line, (panel.x + 10, panel.y + 6 + 22 * row), HUD_TEXT)
+        width = self.screen.get_width()
+        self.screen.fill(HUD_BACK, (0, 0, width, HUD_HEIGHT))
+        self._text(self.status(), (10, 6), HUD_TEXT)
+        self._text(self._second_line(), (10, 27), HUD_DIM)
+
+    def _text(self, text: str, where: tuple[int, int], colour: tuple[int, int, int]) -> None:
+        self.screen.blit(self.font.render(text, True, colour), where)
+
+    def _second_line(self) -> str:
+        if not self.editing:
+            return self.notice or HELP
+        if self.editor.naming is not None:
+            return f"save as: {self.editor.naming}_   (Enter saves, Esc cancels)"
+        return self.editor.message or "h help   Enter: hand the shape to the swarm"
+
+    def status(self) -> str:
+        if self.editing:
+            return self.editor.status()
+        swarm = self.swarm
+        settled = int((swarm.state == SETTLED).sum())
+        done = swarm.completed_at
+        formed = f"   formed at step {max(done)}" if None not in done else ""
+        paused = "   PAUSED" if self.paused else ""
+        missing = len(swarm.filled) - len(swarm.cell)
+        if missing > 0:
+            formed += f"   {missing} agents short"
+        return (
+            f"step {swarm.step_count}   settled {settled}/{len(swarm.filled)}   "
+            f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "
+            f"{self.clock.get_fps():.0f} FPS   seed {swarm.seed}{formed}{paused}"
+        )

@@ -1,0 +1,52 @@
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from swarmshape.core.audit import overlapping_pairs
+from swarmshape.core.motion import Limits, advance
+
+
+def brute_force_pairs(pos):
+    n = len(pos)
+    return {
+        (i, j)
+        for i in range(n)
+        for j in range(i + 1, n)
+        if np.abs(pos[i] - pos[j]).max() < 1 - 1e-9
+    }
+
+
+POINTS = st.lists(
+    st.tuples(st.floats(-6, 6, allow_nan=False), st.floats(-6, 6, allow_nan=False)),
+    max_size=40,
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(POINTS)
+def test_spatial_hash_finds_exactly_the_overlapping_pairs(points):
+    pos = np.array(points, dtype=np.float64).reshape(-1, 2)
+    i, j = overlapping_pairs(pos)
+    found = {(min(a, b), max(a, b)) for a, b in zip(i.tolist(), j.tolist(), strict=True)}
+    assert len(found) == len(i), "each pair once"
+    assert found == brute_force_pairs(pos)
+
+
+def test_touching_squares_do_not_overlap():
+    pos = np.array([[0.5, 0.5], [1.5, 0.5], [0.5, 1.5], [1.5, 1.5]])
+    assert len(overlapping_pairs(pos)[0]) == 0
+
+
+def test_speed_and_acceleration_stay_within_limits_and_agents_stop_on_a_centre():
+    limits = Limits(max_speed=0.5, max_accel=0.125)
+    for run in (1, 2, 3, 7):
+        offset, speed, ahead = np.zeros(1), np.zeros(1), np.array([run])
+        speeds = []
+        for _ in range(40):
+            advance(offset, speed, ahead, limits)
+            speeds.append(speed[0])
+        assert max(speeds) <= 0.5 + 1e-12
+        assert np.all(np.abs(np.diff([0.0, *speeds])) <= 0.125 + 1e-12)
+        assert offset[0] == float(run) and speeds[-1] == 0.0

@@ -1,0 +1,83 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from swarmshape.core.shape import SEED_CELLS, Pose, Shape, ShapeError
+from swarmshape.core.world import GroupSpec, WorldError, build_world
+from tests.conftest import grid_from
+
+L_SHAPE = grid_from("""
+#..
+#..
+###
+""")
+
+
+def test_pose_moves_cells_and_turns_them_a_quarter_clockwise():
+    cells = np.array([[0, 0], [2, 0], [0, 1]])
+    assert Pose(5, 7).to_world(cells).tolist() == [[5, 7], [7, 7], [5, 8]]
+    # a quarter turn clockwise on screen (y down): +x goes to +y, +y goes to -x
+    assert Pose(0, 0, 90).to_world(cells).tolist() == [[-1, 0], [-1, 2], [-2, 0]]
+    assert Pose(0, 0, 360).to_world(cells).tolist() == cells.tolist()
+
+
+def test_rotation_must_be_a_quarter_turn():
+    with pytest.raises(ShapeError, match="multiple of 90"):
+        Pose(0, 0, 45)
+
+
+def test_seeds_are_at_least_three_and_not_collinear():
+    assert len(SEED_CELLS) >= 3
+    assert np.linalg.matrix_rank(SEED_CELLS[1:] - SEED_CELLS[0]) == 2
+
+
+def test_rotating_the_seed_pose_rotates_the_formed_shape():
+    plain = build_world([GroupSpec("g", Shape(L_SHAPE), (1, 2, 3), pose=Pose(10, 10))], (30, 30))
+    turned = build_world(
+        [GroupSpec("g", Shape(L_SHAPE), (1, 2, 3), pose=Pose(10, 10, 180))], (30, 30)
+    )
+    centre = np.array([10, 10])
+    # a half turn about the frame origin maps cell c to -c - 1
+    expected = {tuple(c) for c in (2 * centre - plain.targets - 1).tolist()}
+    assert {tuple(c) for c in turned.targets.tolist()} == expected
+    assert {tuple(c) for c in (2 * centre - plain.seeds - 1).tolist()} == {
+        tuple(c) for c in turned.seeds.tolist()
+    }
+
+
+def test_fitting_to_fewer_agents_picks_the_largest_scale_that_fits():
+    square = Shape(np.ones((10, 10), dtype=bool))
+    fitted = square.fitted(30)
+    assert fitted.count <= 30
+    assert fitted.scale == pytest.approx(0.5)  # 5x5 = 25 fits, 6x6 = 36 does not
+    assert square.fitted(100) is square
+
+
+def test_world_places_targets_away_from_the_border_and_checks_room():
+    world = build_world([GroupSpec("g", Shape(L_SHAPE), (1, 2, 3))])
+    assert world.targets.min() >= 3
+    assert (world.targets < np.array(world.size) - 3).all()
+    assert len(world.start_cells()) >= world.agents
+    with pytest.raises(WorldError, match="no room"):
+        build_world([GroupSpec("g", Shape(L_SHAPE), (1, 2, 3), 5, Pose(1, 1))], (5, 5))
+
+
+def test_groups_may_not_overlap():
+    specs = [GroupSpec(n, Shape(L_SHAPE), (1, 2, 3), pose=Pose(5, 5)) for n in "ab"]
+    with pytest.raises(WorldError, match="overlap"):
+        build_world(specs, (30, 30))
+
+
+def test_to_frame_undoes_to_world_for_every_rotation():
+    cells = np.array([[0, 0], [3, -2], [-1, 5]])
+    for rotation in (0, 90, 180, 270):
+        pose = Pose(7, -3, rotation)
+        assert pose.to_frame(pose.to_world(cells)).tolist() == cells.tolist()
+
+
+def test_a_shape_from_cells_keeps_where_they_are():
+    cells = np.array([[-2, 1], [-1, 1], [0, 3]])
+    shape = Shape.from_cells(cells)
+    assert shape.origin == (-2, 1) and shape.grid.shape == (3, 3)
+    assert sorted(shape.cells.tolist()) == sorted(cells.tolist())

@@ -1,0 +1,101 @@
+"""Sweeps on local processes and on a Dask cluster, resuming, and plots."""
+
+from __future__ import annotations
+
+import pytest
+from PIL import Image
+
+from swarmshape.cli import main
+from swarmshape.errors import InputError
+from swarmshape.experiments.plot import plot_results
+from swarmshape.experiments.sweep import read_rows, read_sweep, sweep
+from tests.conftest import SHAPES
+
+TINY = f"""
+shapes = ["{SHAPES / "line.png"}"]
+strategies = ["optimal", "greedy"]
+agents = [0, 20]
+seeds = 2
+"""
+
+
+def without_times(rows):
+    return [{k: v for k, v in row.items() if k != "wall_time"} for row in rows]
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    return path
+
+
+def test_eight_runs_are_the_same_on_processes_and_on_a_dask_cluster(tiny, tmp_path):
+    from dask.distributed import LocalCluster
+
+    runs = read_sweep(tiny)
+    assert len(runs) == 8
+    assert sweep(runs, tmp_path / "pool.csv", tiny.parent, workers=2) == 8
+    with LocalCluster(n_workers=2, processes=False, dashboard_address=None) as cluster:
+        assert sweep(runs, tmp_path / "dask.csv", tiny.parent, dask=cluster.scheduler_address) == 8
+    pool, dask = read_rows(tmp_path / "pool.csv"), read_rows(tmp_path / "dask.csv")
+    assert len(pool) == 8 and without_times(pool) == without_times(dask)
+    assert {row["coverage"] for row in pool} == {"1.0"}
+
+
+def test_a_killed_sweep_resumes_without_redoing_finished_rows(tiny, tmp_path):
+    out = tmp_path / "out.csv"
+    runs = read_sweep(tiny)
+    sweep(runs, out, tiny.parent, workers=1)
+    rows = read_rows(out)
+    # as if killed after five runs: the header and five rows were on disk
+    lines = out.read_text().splitlines(keepends=True)
+    out.write_text("".join(lines[:6]))
+    kept = {row["run"]: row["wall_time"] for row in read_rows(out)}
+    assert sweep(runs, out, tiny.parent, workers=1) == 3
+    again = read_rows(out)
+    assert without_times(again) == without_times(rows)
+    assert all(row["wall_time"] == kept[row["run"]] for row in again if row["run"] in kept)
+
+
+def test_the_command_line_sweeps_and_plots(tiny, tmp_path, capsys):
+    assert main(["sweep", str(tiny), "--workers", "2"]) == 0
+    assert "8 runs done now" in capsys.readouterr().out
+    assert main(["sweep", str(tiny)]) == 0
+    assert "0 runs done now, 8 were there already" in capsys.readouterr().out
+    paths = plot_results(tmp_path / "tiny.csv", tmp_path / "plots", ("png", "svg"))
+    assert sorted(p.name for p in paths) == [
+        "coverage.png",
+        "coverage.svg",
+        "steps.png",
+        "steps.svg",
+    ]
+    with Image.open(tmp_path / "plots" / "coverage.png") as image:
+        assert image.size[0] > 400
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("strategies = ['optimal']", "needs shapes"),
+        (TINY + "speed = 3\n", "unknown key 'speed'"),
+        (TINY.replace("seeds = 2", "seeds = 'two'"), "seeds must be"),
+        ("shapes = [", "not valid TOML"),
+    ],
+)
+def test_bad_sweep_files_say_what_is_wrong(tmp_path, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_sweep(path)
+
+
+def test_plots_are_not_overwritten_without_force(tiny, tmp_path, capsys):
+    assert main(["sweep", str(tiny), "--workers", "1"]) == 0
+    plots = tmp_path / "plots"
+    assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots)]) == 0
+    before = (plots / "steps.png").stat().st_mtime_ns
+    assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots)]) == 2
+    assert "add --force" in capsys.readouterr().err
+    assert (plots / "steps.png").stat().st_mtime_ns == before
+    assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots), "--force"]) == 0

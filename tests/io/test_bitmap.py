@@ -1,0 +1,112 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from swarmshape.io.bitmap import BitmapError, load_grid, save_grid
+
+
+def write(path, array, mode=None):
+    Image.fromarray(np.asarray(array, dtype=np.uint8), mode).save(path)
+    return path
+
+
+def test_dark_ink_on_light_background_is_cropped(tmp_path):
+    image = np.full((10, 12), 255)
+    image[2:5, 3:9] = 0
+    grid = load_grid(write(tmp_path / "a.png", image))
+    assert grid.shape == (3, 6)
+    assert grid.all()
+
+
+def test_light_ink_on_dark_background_is_detected(tmp_path):
+    image = np.zeros((10, 10))
+    image[4:6, 2:8] = 255
+    grid = load_grid(write(tmp_path / "a.png", image))
+    assert grid.shape == (2, 6) and grid.all()
+
+
+def test_invert_forces_light_ink(tmp_path):
+    image = np.full((6, 6), 255)
+    image[1:3, 1:3] = 0
+    grid = load_grid(write(tmp_path / "a.png", image), invert=True)
+    assert grid.sum() == 36 - 4
+
+
+def test_transparent_pixels_are_never_ink(tmp_path):
+    rgba = np.zeros((8, 8, 4))
+    rgba[..., 3] = 0  # transparent canvas
+    rgba[2:6, 3:5] = (250, 250, 250, 255)  # a white cut-out is ink on a transparent canvas
+    grid = load_grid(write(tmp_path / "a.png", rgba, "RGBA"))
+    assert grid.shape == (4, 2) and grid.all()
+
+
+def test_transparent_black_pixels_on_white_are_not_ink(tmp_path):
+    rgba = np.full((6, 6, 4), 255)
+    rgba[1:3, 1:3] = (0, 0, 0, 255)
+    rgba[4, 4] = (0, 0, 0, 0)  # black but transparent
+    grid = load_grid(write(tmp_path / "a.png", rgba, "RGBA"))
+    assert grid.shape == (2, 2) and grid.all()
+
+
+def test_large_image_is_area_averaged_to_cells(tmp_path):
+    image = np.full((100, 120), 255)
+    image[:, :100] = 0
+    image[:50, 100:] = 0
+    grid = load_grid(write(tmp_path / "a.png", image), cells=12)
+    expected = np.ones((10, 12), dtype=bool)
+    expected[5:, 10:] = False
+    assert np.array_equal(grid, expected)
+
+
+def test_a_cell_is_ink_when_at_least_half_of_it_is(tmp_path):
+    image = np.full((40, 30), 255)
+    image[:, :20] = 0
+    image[:20, 20:26] = 0  # 60 % of the cells in the upper right
+    image[20:, 26:] = 0  # 40 % of the cells in the lower right
+    grid = load_grid(write(tmp_path / "a.png", image), cells=4)
+    assert grid.tolist() == [[True, True, True]] * 2 + [[True, True, False]] * 2
+
+
+def test_gif_first_frame_and_other_formats(tmp_path):
+    frames = [Image.new("L", (5, 5), 255) for _ in range(2)]
+    frames[0].paste(0, (1, 1, 3, 3))
+    frames[0].save(tmp_path / "a.gif", save_all=True, append_images=frames[1:])
+    assert load_grid(tmp_path / "a.gif").shape == (2, 2)
+    image = np.full((6, 6), 255)
+    image[2:4, 2:4] = 0
+    for suffix in ("bmp", "webp"):
+        Image.fromarray(image.astype(np.uint8)).save(tmp_path / f"a.{suffix}", lossless=True)
+        assert load_grid(tmp_path / f"a.{suffix}").shape == (2, 2)
+
+
+def test_save_then_load_round_trips_exactly(tmp_path):
+    rng = np.random.default_rng(3)
+    grid = rng.random((9, 13)) < 0.5
+    grid[0, 0] = grid[-1, -1] = True  # keep the bounding box, so cropping changes nothing
+    save_grid(grid, tmp_path / "g.png")
+    assert np.array_equal(load_grid(tmp_path / "g.png"), grid)
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "message"),
+    [
+        ("missing.png", None, "no such file"),
+        ("text.png", b"this is not an image", "not an image"),
+        ("blank.png", "white", "no shape found"),
+    ],
+)
+def test_bad_images_say_what_is_wrong(tmp_path, name, content, message):
+    path = tmp_path / name
+    if content == "white":
+        write(path, np.full((5, 5), 255))
+    elif content is not None:
+        path.write_bytes(content)
+    with pytest.raises(BitmapError, match=message):
+        load_grid(path)
+
+
+def test_a_directory_is_not_an_image(tmp_path):
+    with pytest.raises(BitmapError, match="directory"):
+        load_grid(tmp_path)

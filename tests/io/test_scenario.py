@@ -1,0 +1,49 @@
+from __future__ import annotations
+
+import pytest
+
+from swarmshape.core.shape import Pose
+from swarmshape.errors import InputError
+from swarmshape.io.scenario import load_scenario, scenario_settings
+from tests.conftest import SHAPES
+
+
+def test_two_squares_has_two_coloured_groups_with_poses():
+    scenario = load_scenario(SHAPES / "two-squares.toml")
+    assert [g.name for g in scenario.groups] == ["blue", "red"]
+    assert scenario.groups[0].colour == (0x3A, 0x6F, 0xD8)
+    assert scenario.groups[1].pose == Pose(16, 12)
+    assert scenario_settings(SHAPES / "two-squares.toml")["strategy"] == "paper"
+
+
+def test_an_image_is_a_scenario_of_one_group():
+    scenario = load_scenario(SHAPES / "line.png")
+    assert scenario.name == "line.png"
+    assert len(scenario.groups) == 1 and scenario.groups[0].shape.count == 16
+
+
+def write(tmp_path, text):
+    (tmp_path / "line.png").write_bytes((SHAPES / "line.png").read_bytes())
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("seed = 1\n", "at least one"),
+        ("[[groups]]\nagents = 3\n", "needs a shape"),
+        ("[[groups]]\nshape = 'line.png'\nagents = 'many'\n", "agents must be int"),
+        ("[[groups]]\nshape = 'line.png'\nagents = true\n", "agents must be int"),
+        ("[[groups]]\nshape = 'line.png'\ncolour = 'blurple'\n", "not a colour"),
+        ("[[groups]]\nshape = 'line.png'\npose = {x = 1, z = 2}\n", "unknown key 'z'"),
+        ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "two integers"),
+        ("max_speed = 'fast'\n[[groups]]\nshape = 'line.png'\n", "max_speed must be"),
+        ("[[groups]]\nshape = 'missing.png'\n", "no such file"),
+    ],
+)
+def test_bad_scenarios_name_the_file_and_the_key(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(InputError, match=message):
+        load_scenario(path)

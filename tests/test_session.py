@@ -1,0 +1,106 @@
+"""Recording, traces, saved states and start positions, through the real command line."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+from PIL import Image
+
+from swarmshape.cli import main
+from swarmshape.errors import InputError
+from swarmshape.io.scenario import read_start_cells
+from swarmshape.ui.render import SEED_GREEN
+from tests.conftest import SHAPES, grid_from, world_of
+
+HORSESHOE = str(SHAPES / "horseshoe.png")
+
+
+def run(*args: str) -> None:
+    assert main([*args]) == 0
+
+
+def test_a_gif_has_the_expected_frames_and_its_first_shows_the_seeds(tmp_path):
+    gif = tmp_path / "run.gif"
+    run(HORSESHOE, "--headless", "--seed", "2", "--record", str(gif), "--record-every", "5",
+        "--metrics", str(tmp_path / "m.json"))  # fmt: skip
+    steps = json.loads((tmp_path / "m.json").read_text())["steps"]
+    with Image.open(gif) as image:
+        expected = steps // 5 + 1 + (steps % 5 > 0)  # step 0, every 5th, and the last
+        assert image.n_frames == expected
+        image.seek(0)
+        colours = {rgb for _, rgb in image.convert("RGB").getcolors(1 << 16)}
+    assert any(
+        all(abs(c - s) < 12 for c, s in zip(rgb, SEED_GREEN, strict=True)) for rgb in colours
+    )
+
+
+@pytest.mark.parametrize("suffix", [".webp", ".png"])
+def test_webp_and_apng_are_animations_too(tmp_path, suffix):
+    out = tmp_path / f"run{suffix}"
+    run(str(SHAPES / "line.png"), "--headless", "--seed", "1", "--record", str(out))
+    with Image.open(out) as image:
+        assert getattr(image, "n_frames", 1) > 1
+
+
+def test_frames_go_to_a_folder_as_numbered_pngs(tmp_path):
+    run(str(SHAPES / "line.png"), "--headless", "--seed", "1", "--frames", str(tmp_path / "f"),
+        "--record-every", "10")  # fmt: skip
+    names = sorted(p.name for p in (tmp_path / "f").iterdir())
+    assert names[0] == "frame-0000000.png" and names[1] == "frame-0000010.png"
+
+
+def test_the_last_trace_row_equals_the_metrics_file(tmp_path):
+    trace, metrics = tmp_path / "t.csv", tmp_path / "m.json"
+    run(str(SHAPES / "two-squares.toml"), "--headless", "--seed", "3", "--strategy", "optimal",
+        "--trace", str(trace), "--trace-every", "7", "--metrics", str(metrics))  # fmt: skip
+    rows = list(csv.DictReader(trace.open()))
+    result = json.loads(metrics.read_text())
+    last = rows[-1]
+    assert int(last["step"]) == result["steps_run"]
+    assert float(last["coverage"]) == result["coverage"] and float(last["iou"]) == result["iou"]
+    assert int(last["overlaps"]) == result["overlaps"]
+    for group in result["groups"]:
+        assert float(last[f"{group['name']}.coverage"]) == group["coverage"]
+    assert [int(r["step"]) for r in rows[:3]] == [0, 7, 14]
+
+
+def test_save_then_load_then_continue_equals_an_uninterrupted_run(tmp_path):
+    common = [str(SHAPES / "ring.png"), "--headless", "--seed", "4", "--cells", "16"]
+    run(*common, "--strategy", "random", "--metrics", str(tmp_path / "full.json"))
+    run(*common, "--strategy", "random", "--max-steps", "40", "--save-state",
+        str(tmp_path / "half.state"))  # fmt: skip
+    run("--load-state", str(tmp_path / "half.state"), "--headless", "--metrics",
+        str(tmp_path / "resumed.json"))  # fmt: skip
+    assert (tmp_path / "full.json").read_bytes() == (tmp_path / "resumed.json").read_bytes()
+
+
+def test_start_positions_come_from_a_csv(tmp_path):
+    world = world_of(grid_from("###"))
+    cells = world.start_cells()[[0, 5, 9]]
+    path = tmp_path / "start.csv"
+    path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in cells.tolist()))
+    assert read_start_cells(path, world).tolist() == cells.tolist()
+    path.write_text("x,y\n0,0\n")
+    with pytest.raises(InputError, match="1 start positions for 3 agents"):
+        read_start_cells(path, world)
+    target = world.targets[0]
+    path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in [*cells[:2].tolist(), target]))
+    with pytest.raises(InputError, match="row 4"):
+        read_start_cells(path, world)
+
+
+def test_outputs_are_not_overwritten_without_force(tmp_path):
+    out = tmp_path / "m.json"
+    out.write_text("precious")
+    assert main([str(SHAPES / "line.png"), "--headless", "--metrics", str(out)]) == 2
+    assert out.read_text() == "precious"
+    run(str(SHAPES / "line.png"), "--headless", "--metrics", str(out), "--force")
+    assert json.loads(out.read_text())["coverage"] == 1.0
+
+
+def test_a_resumed_state_may_be_saved_over_itself(tmp_path):
+    state = tmp_path / "s.state"
+    run(str(SHAPES / "line.png"), "--headless", "--max-steps", "5", "--save-state", str(state))
+    run("--load-state", str(state), "--headless", "--max-steps", "9", "--save-state", str(state))

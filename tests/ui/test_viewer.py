@@ -1,0 +1,83 @@
+from __future__ import annotations
+
+import pygame
+import pytest
+
+from swarmshape.core.swarm import Swarm
+from swarmshape.strategies import create
+from swarmshape.ui.viewer import SPEEDS, Viewer
+from tests.conftest import grid_from, make_swarm, world_of
+
+SHAPE = grid_from("""
+####
+""")
+
+
+@pytest.fixture
+def viewer(tmp_path):
+    view = Viewer(
+        lambda world: Swarm(world, create("paper"), 3),
+        world_of(SHAPE),
+        title="bar.png",
+        size=(640, 400),
+        fps=0,
+        screenshots=tmp_path,
+    )
+    yield view
+    pygame.quit()
+
+
+def press(view: Viewer, key: int) -> None:
+    pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=key, mod=0, unicode=""))
+    view.tick()
+
+
+def test_space_pauses_and_dot_steps_once(viewer):
+    viewer.tick()
+    press(viewer, pygame.K_SPACE)
+    paused_at = viewer.swarm.step_count
+    viewer.tick()
+    assert viewer.swarm.step_count == paused_at
+    press(viewer, pygame.K_PERIOD)
+    assert viewer.swarm.step_count == paused_at + 1
+    assert "PAUSED" in viewer.status()
+
+
+def test_plus_and_minus_change_speed_within_bounds(viewer):
+    start = viewer.speed
+    press(viewer, pygame.K_PLUS)
+    assert viewer.speed > start
+    for _ in range(len(SPEEDS) + 2):
+        press(viewer, pygame.K_MINUS)
+    assert viewer.speed == SPEEDS[0]
+
+
+def test_r_restarts_the_same_run(viewer):
+    for _ in range(5):
+        viewer.tick()
+    first_cells = viewer.swarm.cell.copy()
+    press(viewer, pygame.K_r)
+    assert viewer.swarm.step_count <= viewer.speed
+    assert viewer.swarm.seed == 3
+    fresh = make_swarm(SHAPE, seed=3)
+    for _ in range(viewer.swarm.step_count):
+        fresh.step()
+    assert (fresh.cell == viewer.swarm.cell).all()
+    assert first_cells.shape == fresh.cell.shape
+
+
+def test_f12_saves_a_png_of_the_window(viewer, tmp_path):
+    viewer.tick()
+    press(viewer, pygame.K_F12)
+    shots = list(tmp_path.glob("swarmshape-*.png"))
+    assert len(shots) == 1
+    image = pygame.image.load(shots[0])
+    assert image.get_size() == viewer.screen.get_size()
+
+
+def test_window_resizes_and_q_quits(viewer):
+    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=(500, 300), w=500, h=300))
+    viewer.tick()
+    assert viewer.screen.get_size() == (500, 300)
+    press(viewer, pygame.K_q)
+    assert not viewer.running
