@@ -52,7 +52,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
 
-    shapes = [Shape(load_grid(SHAPES / name, cells=12)) for name in ("horseshoe.png", "square.png")]
+    shapes = [Shape(load_grid(SHAPES / name)) for name in ("horseshoe.png", "square.png")]
     agents = max(s.count for s in shapes) + 30  # spare robots that wander
     world = build_world([GroupSpec("soak", shapes[0], (58, 111, 216), agents)])
     swarm = start_swarm(RunConfig(strategy=args.strategy, seed=args.seed), world)

@@ -27,7 +27,9 @@ def test_headless_run_prints_a_summary_and_writes_metrics(tmp_path, capsys):
     out = tmp_path / "m.json"
     code = main([str(SHAPES / "line.png"), "--headless", "--seed", "4", "--metrics", str(out)])
     assert code == 0
-    assert "line.png: optimal, 16 agents" in capsys.readouterr().out
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("line.png: 16 robots for 16 cells") and len(lines) == 2
+    assert lines[1].startswith("line.png: optimal, 16 robots, 16 targets")
     metrics = json.loads(out.read_text())
     assert set(metrics) >= METRIC_KEYS
     assert metrics["coverage"] == 1.0 and metrics["overlaps"] == 0 and metrics["seed"] == 4
@@ -55,7 +57,7 @@ def test_options_override_the_scenario(tmp_path):
 def test_max_steps_stops_an_unfinished_run(tmp_path):
     out = tmp_path / "m.json"
     args = [str(SHAPES / "square.png"), "--headless", "--max-steps", "10", "--metrics", str(out)]
-    assert main(args) == 0
+    assert main(args) == 3, "exit status 3: stopped before the shape formed"
     metrics = json.loads(out.read_text())
     assert metrics["steps"] is None and metrics["steps_run"] == 10 and metrics["coverage"] < 1
 

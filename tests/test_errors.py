@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shlex
@@ -51,7 +52,24 @@ def bad_files(tmp_path_factory) -> Path:
     (folder / "typo-sweep.toml").write_text(
         "shapes = ['one.png']\nstrategies = ['optimal']\nspeed = 3\n"
     )
-    (folder / "damaged.state").write_bytes(b"swarmshape state 1\n\x80\x05garbage")
+    (folder / "old.state").write_bytes(b"swarmshape state 1\n\x80\x05garbage")
+    manifest = {"format": "swarmshape state", "version": 2, "values": {}, "arrays": []}
+    with (folder / "damaged.state").open("wb") as handle:
+        text = json.dumps({**manifest, "checksum": "0"}).encode()
+        np.savez(handle, manifest=np.frombuffer(text, dtype=np.uint8))
+    os.mkfifo(folder / "pipe.png")
+    os.mkfifo(folder / "pipe.json")
+    (folder / "eps.png").write_text("%!PS-Adobe-3.0 EPSF-3.0\n%%BoundingBox: 0 0 10 10\nshowpage\n")
+    (folder / "short.ppm").write_bytes(b"P6\n10")
+    huge = struct.pack(">IIBBBBB", 10000, 10000, 8, 0, 0, 0, 0)
+    (folder / "huge.png").write_bytes(
+        b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", huge) + png_chunk(b"IEND", b"")
+    )
+    (folder / "beyond.csv").write_text("x,y\n99999999999999999999999,1\n")
+    (folder / "twins.toml").write_text(
+        "[[groups]]\nname = 'a'\nshape = 'one.png'\n[[groups]]\nname = 'a'\nshape = 'one.png'\n"
+    )
+    (folder / "code.toml").write_text("strategy = 'this:X'\n[[groups]]\nshape = 'one.png'\n")
     (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
     (folder / "letters.csv").write_text("x,y\na,b\n")
     (folder / "broken_strategy.py").write_text(
@@ -64,7 +82,7 @@ def bad_files(tmp_path_factory) -> Path:
 
 def swarmshape(folder: Path, command: str) -> subprocess.CompletedProcess:
     args = shlex.split(command.replace("{dir}", str(folder)))
-    if args[0] not in ("sweep", "plot"):
+    if args[0] not in ("sweep", "plot", "edit"):
         args += ["--headless"] + ([] if "--max-steps" in args else ["--max-steps", "3"])
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(folder)}
     return subprocess.run(
@@ -109,5 +127,5 @@ def test_odd_but_valid_images_run(bad_files, name):
     cutout.convert("P").save(bad_files / "palette.png")
     Image.new("CMYK", (20, 20), (0, 0, 0, 255)).save(bad_files / "cmyk.jpg")
     result = swarmshape(bad_files, f"{{dir}}/{name}")
-    assert result.returncode == 0, result.stderr
-    assert f"{name}: optimal" in result.stdout
+    assert result.returncode == 3, result.stderr  # ran, and stopped at 3 steps, before forming
+    assert f"{name}: optimal" in result.stdout and "not formed after 3 steps" in result.stdout

@@ -18,7 +18,8 @@ HORSESHOE = str(SHAPES / "horseshoe.png")
 
 
 def run(*args: str) -> None:
-    assert main([*args]) == 0
+    """A run that forms its shape (exit 0); one stopped early by --max-steps exits 3."""
+    assert main([*args]) == (3 if "--max-steps" in args else 0)
 
 
 def test_a_gif_has_the_expected_frames_and_its_first_shows_the_seeds(tmp_path):
@@ -83,7 +84,7 @@ def test_start_positions_come_from_a_csv(tmp_path):
     path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in cells.tolist()))
     assert read_start_cells(path, world).tolist() == cells.tolist()
     path.write_text("x,y\n0,0\n")
-    with pytest.raises(InputError, match="1 start positions for 3 agents"):
+    with pytest.raises(InputError, match="1 start positions for 3 robots"):
         read_start_cells(path, world)
     target = world.targets[0]
     path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in [*cells[:2].tolist(), target]))

@@ -22,13 +22,13 @@ from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
-from swarmshape.runs import Runner
+from swarmshape.runs import Observer, Runner
 
 AFTER_FORMED = 50
 """Steps a formed shape is watched for, with its spare robots wandering."""
 
 
-class InvariantWatch:
+class InvariantWatch(Observer):
     """An observer that notes, in words, every invariant a run breaks, and fingerprints each
     step so that two runs can be compared."""
 
@@ -73,9 +73,6 @@ class InvariantWatch:
         self._cells, self._settled = swarm.cell.copy(), swarm.state == SETTLED
         self.digest.update(np.ascontiguousarray(pos).tobytes())
         self.digest.update(swarm.state.tobytes())
-
-    def close(self, swarm: Swarm) -> None:
-        """Nothing to write."""
 
     def _note(self, problem: str) -> None:
         if len(self.problems) < self.limit:

@@ -12,18 +12,21 @@ import os
 import sys
 import tempfile
 import traceback
+import warnings
 from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
 from swarmshape.errors import InputError
-from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure
-from swarmshape.session import Outputs, Session
+from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world
+from swarmshape.session import Outputs, Session, preview_text
 from swarmshape.strategies.fill_order import ORDERS
 
 COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check")
+NOT_FORMED = 3
+"""Exit status of a headless run that stopped before its shape formed (and of a failed check)."""
 RUN_OPTIONS = ("strategy", "order", "seed", "agents", "cells", "threshold", "arena",
-               "max_speed", "max_accel", "max_steps", "start")  # fmt: skip
+               "max_speed", "max_accel", "max_steps", "start", "fit")  # fmt: skip
 """Command-line options that are fields of `RunConfig` (``--invert`` too, when given)."""
 
 
@@ -132,7 +135,8 @@ def _shared_options() -> argparse.ArgumentParser:
     image.add_argument(
         "--cells",
         type=int,
-        help=f"longest side of the shape in cells; larger images shrink (default {defaults.cells})",
+        help="cells across the shape's long side; images shrink or grow to it "
+        "(default: the image's own size, at most 32)",
     )
     image.add_argument(
         "--threshold",
@@ -140,6 +144,14 @@ def _shared_options() -> argparse.ArgumentParser:
         help=f"luminance 0..1 between ink and background (default {defaults.threshold})",
     )
     image.add_argument("--invert", action="store_true", help="the ink is the light part")
+    image.add_argument(
+        "--fit",
+        choices=("agents",),
+        help="agents: size the shape to --agents (as many cells as robots, or just fewer)",
+    )
+    image.add_argument(
+        "--preview", action="store_true", help="print the shape as text and stop (no run)"
+    )
     sim = shared.add_argument_group("simulation")
     sim.add_argument("--arena", type=_size, help="arena size in cells as WxH (default: automatic)")
     sim.add_argument(
@@ -168,6 +180,12 @@ def _shared_options() -> argparse.ArgumentParser:
     record.add_argument(
         "--save-state", type=Path, help="save the whole run at its end, to resume it later"
     )
+    record.add_argument(
+        "--positions", type=Path, help="write every robot's position per step: .npz or .csv"
+    )
+    record.add_argument(
+        "--positions-every", type=int, default=1, help="positions every K-th step (default 1)"
+    )
     record.add_argument("--force", action="store_true", help="overwrite existing output files")
     return shared
 
@@ -194,28 +212,53 @@ def main(argv: list[str] | None = None) -> int:
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
         argv.insert(0, "run")
     args = build_parser().parse_args(argv)
+    warnings.showwarning = _warning_line
     try:
         return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
         print(f"swarmshape: error: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        print("swarmshape: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (| head): outputs are written already
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except Exception:  # a bug of ours: a short word here, the whole story in a log
-        log = Path(tempfile.gettempdir()) / f"swarmshape-crash-{os.getpid()}.log"
-        log.write_text(traceback.format_exc(), encoding="utf-8")
-        print(f"swarmshape: internal error, please report it; details in {log}", file=sys.stderr)
+        print(f"swarmshape: internal error, please report it; {_crash_log()}", file=sys.stderr)
         return 1
+
+
+def _warning_line(message: Warning | str, category: type, *_: object, **__: object) -> None:
+    """A warning is one line on stderr, like an error, without a source line below it."""
+    print(f"swarmshape: warning: {message}", file=sys.stderr)
+
+
+def _crash_log() -> str:
+    """Write the traceback to a fresh, private log file; say where (or, failing that, what)."""
+    details = traceback.format_exc()
+    try:
+        fd, path = tempfile.mkstemp(prefix="swarmshape-crash-", suffix=".log")
+        with os.fdopen(fd, "w", encoding="utf-8") as log:
+            log.write(details)
+    except OSError:
+        return f"no log could be written ({details.strip().splitlines()[-1]})"
+    return f"details in {path}"
 
 
 def run_session(args: argparse.Namespace) -> int:
     """``run`` and ``edit``: a run described by the options, or a saved one resumed."""
     max_steps = getattr(args, "max_steps", None)
+    given = {name: getattr(args, name, None) for name in RUN_OPTIONS}
+    given["invert"] = args.invert or None
     if args.load_state is not None:
+        _nothing_that_a_resume_ignores(args, given)
         config = RunConfig(**({} if max_steps is None else {"max_steps": max_steps}))
     else:
-        given = {name: getattr(args, name, None) for name in RUN_OPTIONS}
-        config = configure(args.path, **given, invert=args.invert or None)
+        config = configure(args.path, **given)
+    if args.preview:
+        print(preview_text(load_world(config)))
+        return 0
     outputs = Outputs(
         metrics=getattr(args, "metrics", None),
         record=args.record,
@@ -224,18 +267,34 @@ def run_session(args: argparse.Namespace) -> int:
         trace=args.trace,
         trace_every=args.trace_every,
         save_state=args.save_state,
+        positions=args.positions,
+        positions_every=args.positions_every,
         force=args.force,
     )
     editing = args.command == "edit"
-    Session(
+    window = editing or not args.headless
+    metrics = Session(
         config,
         outputs,
         resume=args.load_state,
-        window=editing or not args.headless,
+        strategy=args.strategy,
+        window=window,
         editing=editing,
         speed=args.speed,
     ).start()
-    return 0
+    return NOT_FORMED if not window and metrics["steps"] is None else 0
+
+
+def _nothing_that_a_resume_ignores(args: argparse.Namespace, given: dict) -> None:
+    """A saved run resumes exactly as it was: options that would change it are refused rather
+    than silently ignored (--strategy may only name the code a run was saved with)."""
+    if args.path is not None:
+        raise InputError(f"--load-state resumes a saved run; {args.path} would not be used")
+    ignored = [name for name, value in given.items() if value is not None]
+    ignored = [name for name in ignored if name not in ("max_steps", "strategy")]
+    if ignored:
+        flag = "--" + ignored[0].replace("_", "-")
+        raise InputError(f"--load-state resumes a saved run as it was; {flag} cannot change it")
 
 
 def run_sweep(args: argparse.Namespace) -> int:
@@ -269,7 +328,7 @@ def run_check(args: argparse.Namespace) -> int:
 
     report = check_strategy(args.strategy, runs=args.runs, seed=args.seed, max_steps=args.max_steps)
     print(report.text())
-    return 0 if report.clean else 3
+    return 0 if report.clean else NOT_FORMED
 
 
 COMMAND_FUNCTIONS = {

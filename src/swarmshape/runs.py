@@ -14,20 +14,22 @@ the end; the loop is `Runner`, which the window drives one step at a time.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+import warnings
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.motion import Limits
+from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import World, build_world
 from swarmshape.errors import InputError
-from swarmshape.io.bitmap import DEFAULT_CELLS, DEFAULT_THRESHOLD
+from swarmshape.io.bitmap import DEFAULT_THRESHOLD, ShapeWarning
 from swarmshape.io.checkpoint import load_state, save_state
 from swarmshape.io.scenario import ImageOptions, load_scenario, read_start_cells, scenario_settings
 from swarmshape.strategies.fill_order import DEFAULT_ORDER, ORDERS
@@ -49,7 +51,8 @@ class RunConfig:
     """None draws a fresh seed when the swarm is built; the swarm records it."""
     agents: int | None = None
     """Robots of a one-group run; None is one per cell of the shape."""
-    cells: int = DEFAULT_CELLS
+    cells: int | None = None
+    """Cells across the shape's long side; None is the image's own size, at most 32."""
     threshold: float = DEFAULT_THRESHOLD
     invert: bool = False
     arena: tuple[int, int] | None = None
@@ -59,6 +62,8 @@ class RunConfig:
     max_steps: int = 500_000
     start: Path | None = None
     """A CSV of start cells (columns x,y); None draws random free cells."""
+    fit: str | None = None
+    """"agents": size the shape to the robots (as many cells as there are robots, or fewer)."""
 
     def __post_init__(self) -> None:
         if self.seed is not None and not 0 <= self.seed < 2**63:
@@ -67,17 +72,66 @@ class RunConfig:
             raise InputError(f"unknown order {self.order!r}; choose one of {', '.join(ORDERS)}")
         if self.max_steps < 0:
             raise InputError(f"--max-steps must be 0 or more, got {self.max_steps}")
+        if self.fit not in FITS:
+            raise InputError(f"unknown --fit {self.fit!r}; choose {', '.join(map(str, FITS[1:]))}")
+        if self.fit == "agents" and self.agents is None:
+            raise InputError("--fit agents sizes the shape to --agents N; give that number")
         Limits(self.max_speed, self.max_accel)  # checks them
 
     @property
     def shape_path(self) -> Path:
         return self.shape if self.shape is not None else bundled_shapes() / DEFAULT_SHAPE
 
+    def values(self) -> dict[str, Any]:
+        """This description as plain values (paths as text, the arena as a list)."""
+        plain = dataclasses.asdict(self)
+        for name in ("shape", "start"):
+            plain[name] = None if plain[name] is None else str(plain[name])
+        plain["arena"] = None if self.arena is None else list(self.arena)
+        return plain
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any], source: str) -> RunConfig:
+        """A description from plain values (a saved run's), each checked for its type."""
+        unknown = sorted(set(values) - set(KINDS))
+        if unknown:
+            raise InputError(f"{source}: unknown run setting {unknown[0]!r}")
+        checked = {
+            name: _typed(value, KINDS[name], f"{source}: {name}") for name, value in values.items()
+        }
+        return cls(**checked)
+
     def seeded(self) -> RunConfig:
         """This description with a concrete seed (a fresh one if it had none)."""
         if self.seed is not None:
             return self
         return dataclasses.replace(self, seed=int(np.random.SeedSequence().generate_state(1)[0]))
+
+
+FITS = (None, "agents")
+
+KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
+         "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,
+         "max_steps": int, "start": Path, "fit": str}  # fmt: skip
+"""The kind of value each `RunConfig` field takes (None is allowed where the default is None)."""
+
+
+def _typed(value: Any, kind: type, where: str) -> Any:
+    """`value` as `kind`, or a one-line error: plain values may come from any file."""
+    if value is None:
+        return None
+    if kind is Path and isinstance(value, str | Path):
+        return Path(value)
+    if kind is tuple:
+        pair = isinstance(value, list | tuple) and len(value) == 2
+        if pair and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+            return (value[0], value[1])
+        raise InputError(f"{where} must be two whole numbers [width, height], got {value!r}")
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    if isinstance(value, kind) and (kind is bool or not isinstance(value, bool)):
+        return value
+    raise InputError(f"{where} must be {kind.__name__}, got {value!r}")
 
 
 def configure(shape: str | Path | None = None, **given: Any) -> RunConfig:
@@ -103,13 +157,23 @@ def bundled_shapes() -> Path:
 def load_world(config: RunConfig) -> World:
     """The scenario's groups, fitted to their robots and placed in the arena."""
     path = config.shape_path
-    scenario = load_scenario(path, ImageOptions(config.cells, config.threshold, config.invert))
+    image = ImageOptions(config.cells, config.threshold, config.invert)
+    scenario = load_scenario(path, image, config.agents if config.fit == "agents" else None)
     specs = list(scenario.groups)
     if config.agents is not None:
         if len(specs) > 1:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
         specs[0] = dataclasses.replace(specs[0], agents=config.agents)
-    return build_world(specs, config.arena or scenario.arena, scenario.name)
+    world = build_world(specs, config.arena or scenario.arena, scenario.name)
+    cells = len(world.targets)
+    if world.agents > 1.5 * cells and config.fit is None:
+        warnings.warn(
+            f"{world.agents:,} robots for a {cells:,}-cell shape: {world.agents - cells:,} "
+            "will wait outside it; --fit agents sizes the shape to the robots",
+            ShapeWarning,
+            stacklevel=2,
+        )
+    return world
 
 
 def build(config: RunConfig) -> Swarm:
@@ -127,23 +191,46 @@ def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None
 
 
 def save(swarm: Swarm, path: Path, config: RunConfig) -> None:
-    """Save a run to resume later (see `resume`)."""
-    save_state(swarm, path, dataclasses.asdict(config))
+    """Save a run to resume later (see `resume`): its description and every array, no code."""
+    save_state(path, prefixed("config", config.values()) | prefixed("swarm", swarm.snapshot()))
 
 
-def resume(path: Path) -> tuple[RunConfig, Swarm]:
-    """A saved run's description and its swarm, ready for its next step."""
-    saved = load_state(path)
-    return RunConfig(**saved.config), saved.swarm
+def resume(path: Path, strategy: str | None = None) -> tuple[RunConfig, Swarm]:
+    """A saved run's description and its swarm, ready for its next step.
+
+    A state file holds no code: a run saved with a registered or installed strategy resumes by
+    its name; one saved with ``file.py:Class`` or ``module:Class`` resumes only when the caller
+    names that same `strategy` again.
+    """
+    saved = Snapshot(load_state(path))
+    config = RunConfig.from_values(saved.part("config").plain(), f"{path}")
+    if strategy is not None and strategy != config.strategy:
+        raise InputError(
+            f"{path}: was saved with the strategy {config.strategy!r}; a saved run resumes as "
+            f"it was, so --strategy {strategy} cannot change it"
+        )
+    if strategies.is_code(config.strategy) and strategy is None:
+        raise InputError(
+            f"{path}: was saved with the strategy {config.strategy}, which is code; a state file "
+            f"never loads code, so name it again to resume: --strategy {config.strategy}"
+        )
+    plugin = strategies.create(config.strategy, order=config.order)
+    return config, Swarm.restored(saved.part("swarm"), plugin)
 
 
-class Observer(Protocol):
+class Observer:
     """Anything that watches a run: it sees the swarm before the first step and after every
-    step, and is closed once at the end (where files get written)."""
+    step, and is closed once at the end (where files get written), or discarded if the run is
+    abandoned. Subclass it and override what you need."""
 
-    def capture(self, swarm: Swarm) -> None: ...
+    def capture(self, swarm: Swarm) -> None:
+        """The swarm as it is now (before the first step, then after each)."""
 
-    def close(self, swarm: Swarm) -> None: ...
+    def close(self, swarm: Swarm) -> None:
+        """The run ended: write what was gathered."""
+
+    def discard(self) -> None:
+        """The run was abandoned (an error, Ctrl+C): remove anything half-written."""
 
 
 class Runner:
@@ -173,15 +260,23 @@ class Runner:
             observer.capture(self.swarm)
 
     def finish(self) -> Swarm:
-        """Step to the end and close the observers."""
-        while not self.finished:
-            self.step()
+        """Step to the end and close the observers (or discard them if stepping fails)."""
+        try:
+            while not self.finished:
+                self.step()
+        except BaseException:
+            self.discard()
+            raise
         self.close()
         return self.swarm
 
     def close(self) -> None:
         for observer in self.observers:
             observer.close(self.swarm)
+
+    def discard(self) -> None:
+        for observer in self.observers:
+            observer.discard()
 
 
 def run(swarm: Swarm, observers: Sequence[Observer] = (), max_steps: int | None = None) -> Swarm:

@@ -18,11 +18,14 @@ from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, blank_world
+from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
-from swarmshape.io.files import check_output, write_text
+from swarmshape.io.files import check_output, distinct_outputs, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour, read_start_cells
 from swarmshape.runs import Observer, RunConfig, Runner, load_world, resume, save, start_swarm
+
+OUTPUT_OPTIONS = ("metrics", "record", "frames", "trace", "save_state", "positions")
 
 BLANK_ARENA = (48, 30)
 BLANK_POSE = Pose(4, 4)
@@ -40,16 +43,19 @@ class Outputs:
     trace: Path | None = None
     trace_every: int = 1
     save_state: Path | None = None
+    positions: Path | None = None
+    positions_every: int = 1
     force: bool = False
 
     def check(self, resumed: Path | None = None) -> None:
         """Fail before the run, not after it, when an output cannot be written or would
         replace a file the user did not ask to replace (`force`, or the state being resumed)."""
-        for option in ("metrics", "record", "trace", "save_state", "frames"):
-            path = getattr(self, option)
-            if path is not None:
-                may_replace = self.force or (resumed is not None and _same(path, resumed))
-                check_output(path, "--" + option.replace("_", "-"), may_replace=may_replace)
+        named = [(f"--{o.replace('_', '-')}", getattr(self, o)) for o in OUTPUT_OPTIONS]
+        named = [(flag, path) for flag, path in named if path is not None]
+        distinct_outputs(named)
+        for flag, path in named:
+            may_replace = self.force or (resumed is not None and _same(path, resumed))
+            check_output(path, flag, may_replace=may_replace, folder=flag == "--frames")
 
     def observers(self) -> list[Observer]:
         """Recording and tracing, as asked for."""
@@ -60,6 +66,8 @@ class Outputs:
             observers.append(Recorder(self.record, self.frames, self.record_every))
         if self.trace:
             observers.append(Trace(self.trace, self.trace_every))
+        if self.positions:
+            observers.append(Positions(self.positions, self.positions_every))
         return observers
 
 
@@ -72,30 +80,34 @@ class Session:
     config: RunConfig
     outputs: Outputs
     resume: Path | None = None
+    strategy: str | None = None
+    """With `resume`: the strategy named on the command line, for a run saved with code."""
     window: bool = True
     editing: bool = False
     speed: float = 8
 
     def start(self) -> dict[str, Any] | None:
-        """Run it; return the headless run's metrics (None after a window)."""
+        """Run it, write its outputs, print its summary; return its metrics (None when the
+        editor closed before any swarm ran)."""
         self.outputs.check(self.resume)
         config, world, make_swarm = self._prepare()
         observers = self.outputs.observers()
         if self.window or self.editing:
             swarm = self._show(config, world, make_swarm, observers)
         else:
-            runner = Runner(make_swarm(world), [*observers, RunProgress()], config.max_steps)
-            swarm = runner.finish()
-        if swarm is None:  # the editor closed before any swarm ran
+            swarm = make_swarm(world)
+            print(opening_line(swarm, config))
+            runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
+            runner.finish()
+        if swarm is None:
             return None
         if self.outputs.save_state:
             save(swarm, self.outputs.save_state, config)
-        if self.window or self.editing:
-            return None
         metrics = run_metrics(swarm)
-        print(summary_line(metrics))
         if self.outputs.metrics:
-            write_text(self.outputs.metrics, json.dumps(metrics, indent=2) + "\n")
+            text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
+            write_text(self.outputs.metrics, text)
+        print(summary_line(metrics))
         return metrics
 
     def _prepare(self) -> tuple[RunConfig, World, Callable[[World], Swarm]]:
@@ -103,9 +115,9 @@ class Session:
         makes a swarm on a world."""
         config = self.config
         if self.resume is not None:
-            saved, swarm = resume(self.resume)
+            saved, swarm = resume(self.resume, self.strategy)
             config = dataclasses.replace(saved, max_steps=config.max_steps)
-            return config, swarm.world, lambda _: resume(self.resume)[1]
+            return config, swarm.world, lambda _: resume(self.resume, self.strategy)[1]
         path = config.shape
         if self.editing and (path is None or not path.exists()):  # a new drawing
             name = path.name if path else "untitled"
@@ -143,21 +155,50 @@ class Session:
         return viewer.swarm
 
 
+def preview_text(world: World) -> str:
+    """Each group's shape as rows of # (a cell) and . (none), with its size."""
+    parts = []
+    for group in world.groups:
+        grid = group.shape.grid
+        head = (
+            f"{group.name}: {int(grid.sum()):,} cells, {grid.shape[1]}x{grid.shape[0]}, "
+            f"{group.agents:,} robots, scale {group.shape.scale:.2f}"
+        )
+        rows = ["".join("#" if cell else "." for cell in row) for row in grid.tolist()]
+        parts.append("\n".join([head, *rows]))
+    return "\n\n".join(parts)
+
+
+def opening_line(swarm: Swarm, config: RunConfig) -> str:
+    """What is about to run, said before it starts (a long run is not a silent one)."""
+    world = swarm.world
+    scale = min(g.shape.scale for g in world.groups)
+    return (
+        f"{world.name}: {_count(world.agents, 'robot')} for {_count(len(world.targets), 'cell')}"
+        f" (scale {scale:.2f}), {swarm.plugin.name}, seed {config.seed}, "
+        f"at most {config.max_steps:,} steps"
+    )
+
+
 def summary_line(metrics: dict[str, Any]) -> str:
     """One human line for the terminal."""
     formed = (
-        f"formed in {metrics['steps']} steps"
+        f"formed in {_count(metrics['steps'], 'step')}"
         if metrics["steps"] is not None
-        else f"not formed after {metrics['steps_run']} steps"
+        else f"not formed after {_count(metrics['steps_run'], 'step')}"
     )
     ratio = metrics["makespan_ratio"]
     versus = "" if ratio is None else f", {ratio:.2f}x the makespan lower bound"
     return (
-        f"{metrics['shape']}: {metrics['strategy']}, {metrics['agents']} agents, "
-        f"{metrics['targets']} targets, scale {metrics['scale']:.2f}: {formed}, "
+        f"{metrics['shape']}: {metrics['strategy']}, {_count(metrics['agents'], 'robot')}, "
+        f"{_count(metrics['targets'], 'target')}, scale {metrics['scale']:.2f}: {formed}, "
         f"coverage {100 * metrics['coverage']:.1f}%, iou {metrics['iou']:.3f}, "
-        f"{metrics['overlaps']} overlaps, seed {metrics['seed']}{versus}"
+        f"{_count(metrics['overlaps'], 'overlap')}, seed {metrics['seed']}{versus}"
     )
+
+
+def _count(number: int, thing: str) -> str:
+    return f"{number:,} {thing}{'' if number == 1 else 's'}"
 
 
 def _same(path: Path, other: Path) -> bool:

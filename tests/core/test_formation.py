@@ -26,7 +26,7 @@ script forms them at full size."""
 
 
 def shipped(name: str) -> np.ndarray:
-    cells = DRAWN_CELLS if name in DRAWN_SHAPES else 32
+    cells = DRAWN_CELLS if name in DRAWN_SHAPES else None
     return load_grid(SHAPES / name, cells=cells)
 
 

@@ -71,7 +71,7 @@ def test_repeated_changes_complete_even_over_wandering_agents_and_pending_messag
     from swarmshape.io.bitmap import load_grid
     from tests.conftest import SHAPES
 
-    shapes = [Shape(load_grid(SHAPES / name, cells=12)) for name in ("horseshoe.png", "square.png")]
+    shapes = [Shape(load_grid(SHAPES / name)) for name in ("horseshoe.png", "square.png")]
     swarm = make_swarm(shapes[0].grid, agents=120, seed=1, strategy="paper")
     for change in range(1, 5):
         run(swarm, max_steps=swarm.step_count + 15_000)

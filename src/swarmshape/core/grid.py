@@ -23,17 +23,20 @@ def bounding_box(image: np.ndarray) -> np.ndarray:
 
 
 def resample(fraction: np.ndarray, long_side: int) -> np.ndarray:
-    """Shrink a 0..1 ink image so its long side is at most `long_side`; ink where >= half.
+    """Resize a 0..1 ink image so its long side is `long_side` cells; ink where >= half.
 
-    Each output cell averages the pixels whose centres fall in its box, first along rows and
-    then along columns, in float32 between the passes: the filter Pillow calls BOX, so shapes
-    shrink the same way images are loaded.
+    Shrinking, each output cell averages the pixels whose centres fall in its box, first along
+    rows and then along columns, in float32 between the passes: the filter Pillow calls BOX, so
+    shapes shrink the same way images are loaded. Growing, each cell takes the pixel under its
+    centre, so a small icon becomes the same picture in bigger blocks.
     """
     height, width = fraction.shape
     factor = long_side / max(height, width)
-    if factor >= 1.0:
-        return fraction >= 0.5
     size = (max(1, round(width * factor)), max(1, round(height * factor)))
+    if factor >= 1.0:
+        rows = np.minimum(((np.arange(size[1]) + 0.5) * height / size[1]).astype(int), height - 1)
+        cols = np.minimum(((np.arange(size[0]) + 0.5) * width / size[0]).astype(int), width - 1)
+        return fraction[np.ix_(rows, cols)] >= 0.5
     shrunk = fraction.astype(np.float32)
     if size[0] != width:
         shrunk = _box_average(shrunk, size[0], axis=1)

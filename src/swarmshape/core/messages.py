@@ -7,8 +7,13 @@ The log keeps every message ever sent so that tests and users can read the conve
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Iterable, Sequence
+from dataclasses import astuple, dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from swarmshape.core.snapshot import Snapshot
 
 SEEDS = -1
 """Sender id of the seed robots, which send each group's first message."""
@@ -53,3 +58,22 @@ class MessageQueue:
         delivered = list(self._pending)
         self._pending.clear()
         return delivered
+
+    def snapshot(self) -> dict[str, Any]:
+        """The log and the pending messages, one row ``(step, sender, recipient, target)`` each."""
+        return {"log": _table(self.log), "pending": _table(self._pending)}
+
+    @classmethod
+    def restored(cls, saved: Snapshot, robots: int, targets: int) -> MessageQueue:
+        queue = cls()
+        queue.log = [Message(*row) for row in saved.array("log", np.int64, (None, 4)).tolist()]
+        pending = saved.array("pending", np.int64, (None, 4))
+        recipient, target = pending[:, 2], pending[:, 3]
+        if ((recipient < 0) | (recipient >= robots) | (target < 0) | (target >= targets)).any():
+            raise saved.error("pending", "names a robot or a target that does not exist")
+        queue._pending = deque(Message(*row) for row in pending.tolist())
+        return queue
+
+
+def _table(messages: Iterable[Message]) -> np.ndarray:
+    return np.array([astuple(m) for m in messages], dtype=np.int64).reshape(-1, 4)

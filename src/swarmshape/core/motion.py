@@ -18,6 +18,10 @@ from swarmshape.errors import InputError
 STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
 """Direction index -> unit step; index 0 means "no direction"."""
 
+SLOWEST = 0.001
+"""Smallest speed and acceleration limit: a thousand steps a cell. Far smaller ones would only
+make numbers underflow (a robot's braking distance becomes infinite)."""
+
 TOUCH = 1.0 - 1e-9
 """Squares whose centres are closer than this on both axes overlap; touching is allowed."""
 
@@ -45,10 +49,14 @@ class Limits:
     max_accel: float = 0.125
 
     def __post_init__(self) -> None:
-        if not 0.0 < self.max_speed <= 1.0:
-            raise InputError(f"max speed must be in (0, 1] cells per step, got {self.max_speed}")
-        if not 0.0 < self.max_accel <= self.max_speed:
-            raise InputError(f"max acceleration must be in (0, max speed], got {self.max_accel}")
+        if not SLOWEST <= self.max_speed <= 1.0:
+            raise InputError(
+                f"max speed must be in [{SLOWEST}, 1] cells per step, got {self.max_speed}"
+            )
+        if not SLOWEST <= self.max_accel <= self.max_speed:
+            raise InputError(
+                f"max acceleration must be in [{SLOWEST}, max speed], got {self.max_accel}"
+            )
 
 
 def advance(offset: np.ndarray, speed: np.ndarray, ahead: np.ndarray, limits: Limits) -> np.ndarray:

@@ -10,11 +10,14 @@ cached per agent and recomputed when the agent is told its view is stale (it got
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
 from swarmshape.core.motion import STEPS, inside
+from swarmshape.core.snapshot import Snapshot
 
 WINDOW_MARGIN = 6
 """Cells around an agent and its goal searched first for a path."""
@@ -130,6 +133,20 @@ class FieldPlanner:
                 row[part] = self.field(goal - offset, passable[part])
                 if np.isfinite(row[cell[0], cell[1]]):
                     return
+
+    def snapshot(self) -> dict[str, Any]:
+        spare = np.array(self._spare, dtype=np.int64)
+        return {"rows": self._rows, "row_of": self._row_of, "spare": spare}
+
+    def restore(self, saved: Snapshot) -> None:
+        """Fields as saved (they decide paths, so a resumed run must keep them)."""
+        width, height = self.size
+        rows = saved.array("rows", np.float64, (None, width * height), 0, finite=False)
+        if len(rows) == 0 or np.isfinite(rows[0]).any():
+            raise saved.error("rows", "lacks its first, empty field")
+        self._rows = rows
+        self._row_of = saved.array("row_of", np.int64, self._row_of.shape, 0, len(rows) - 1)
+        self._spare = saved.array("spare", np.int64, (None,), 1, len(rows) - 1).tolist()
 
     def planned(self, agents: np.ndarray) -> np.ndarray:
         return self._row_of[agents] > 0

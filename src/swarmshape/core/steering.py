@@ -13,7 +13,7 @@ the cells through the swarm. Robots resting on their targets settle, and the str
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -22,6 +22,7 @@ from swarmshape.core.lattice import FREE, SEED, WALL
 from swarmshape.core.messages import MessageQueue
 from swarmshape.core.motion import STEPS, Motion
 from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
+from swarmshape.core.snapshot import Snapshot, decode_attributes, encode_attributes, prefixed
 from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
 from swarmshape.core.tswap import rotate_rings, settled_swaps
 
@@ -57,6 +58,16 @@ class Strategy:
     def drive(self, swarm: Swarm) -> Steering:
         """The swarm's driver for this plug-in (the core's side of the contract)."""
         return Steering(swarm, self)
+
+    def snapshot(self) -> dict[str, Any]:
+        """What a saved run keeps of this strategy. Default: every attribute, which must be a
+        number, text, a numpy array, or a list of them."""
+        return encode_attributes(f"strategy {self.name!r}", vars(self))
+
+    def restore(self, saved: Snapshot, swarm: SwarmView) -> None:
+        """Take back what `snapshot` saved, into a freshly made strategy."""
+        for name, value in decode_attributes(saved, vars(self)).items():
+            setattr(self, name, value)
 
 
 class SwarmView:
@@ -183,6 +194,27 @@ class Steering:
     @property
     def messages_sent(self) -> int:
         return len(self.queue.log)
+
+    def snapshot(self) -> dict[str, Any]:
+        values = {
+            "target": self.target,
+            "blocked": self.blocked,
+            "routed": self.routed,
+            "recruited": self.recruited,
+        }
+        values |= prefixed("queue", self.queue.snapshot())
+        values |= prefixed("planner", self.planner.snapshot())
+        return values | prefixed("strategy", self.strategy.snapshot())
+
+    def restore(self, saved: Snapshot) -> None:
+        n, m = len(self.target), len(self.swarm.world.targets)
+        self.target = saved.array("target", np.int64, (n,), -1, m - 1)
+        self.blocked = saved.array("blocked", np.int64, (n,), 0)
+        self.routed = saved.array("routed", bool, (n,))
+        self.recruited = saved.array("recruited", bool, (n,))
+        self.queue = MessageQueue.restored(saved.part("queue"), n, m)
+        self.planner.restore(saved.part("planner"))
+        self.strategy.restore(saved.part("strategy"), self.view)
 
     # --- what strategies call, through their view ---------------------------------------------
 

@@ -10,19 +10,24 @@ never imports pygame.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from swarmshape.core.audit import overlaps
-from swarmshape.core.lattice import FREE, SEED, Lattice
+from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, TOUCH, Limits, advance, positions, resolve_claims
-from swarmshape.core.states import WAITING
-from swarmshape.core.world import WorldError
+from swarmshape.core.snapshot import Snapshot, prefixed
+from swarmshape.core.states import WAITING, State
+from swarmshape.core.world import World, WorldError
+from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
     from swarmshape.core.shape import Pose, Shape
-    from swarmshape.core.world import World
+
+ARRAYS = ("cell", "start_cell", "direction", "ahead", "offset", "speed", "distance", "state",
+          "filled", "overlaps")  # fmt: skip
+"""Per-robot (and per-target, per-group) arrays that a saved run keeps."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,12 @@ class Driver(Protocol):
     @property
     def messages_sent(self) -> int: ...
 
+    def snapshot(self) -> dict[str, Any]:
+        """The driver's state, as plain values."""
+
+    def restore(self, saved: Snapshot) -> None:
+        """Take back what `snapshot` saved (the swarm's own arrays are back already)."""
+
 
 class Plugin(Protocol):
     """A strategy (or any other plug-in kind): it names itself and drives a swarm."""
@@ -88,13 +99,8 @@ class Swarm:
         params: Params | None = None,
         start: np.ndarray | None = None,
     ) -> None:
-        self.world = world
-        self.plugin = plugin
-        self.seed = seed
-        self.params = params or Params()
-        self.rng = np.random.default_rng(seed)
+        self._take(world, plugin, seed, params or Params())
         n = world.agents
-        self.group = np.repeat(np.arange(len(world.groups)), [g.agents for g in world.groups])
         if start is None:  # random free cells, drawn from the run's one generator
             starts = world.start_cells()
             start = starts[self.rng.choice(len(starts), n, replace=False)]
@@ -122,6 +128,103 @@ class Swarm:
         self.driver = plugin.drive(self)
         self._index_world()
         self.driver.start()
+
+    def _take(self, world: World, plugin: Plugin, seed: int, params: Params) -> None:
+        """What a swarm is given, whether it starts afresh or resumes."""
+        self.world = world
+        self.plugin = plugin
+        self.seed = seed
+        self.params = params
+        self.rng = np.random.default_rng(seed)
+        self.group = np.repeat(np.arange(len(world.groups)), [g.agents for g in world.groups])
+
+    # --- saving and resuming --------------------------------------------------------------------
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything the next step depends on, as plain values (see `core.snapshot`)."""
+        limits = self.params.limits
+        values = {
+            "seed": self.seed,
+            "max_speed": limits.max_speed,
+            "max_accel": limits.max_accel,
+            "wander_rate": self.params.wander_rate,
+            "patience": self.params.patience,
+            "rng": self.rng.bit_generator.state,
+            "step": self.step_count,
+            "overlap_total": self.overlap_total,
+            "completed_at": self.completed_at,
+            **{name: getattr(self, name) for name in ARRAYS},
+            "holder": self.lattice.holder,
+        }
+        values |= prefixed("world", self.world.snapshot())
+        return values | prefixed("driver", self.driver.snapshot())
+
+    @classmethod
+    def restored(cls, saved: Snapshot, plugin: Plugin) -> Swarm:
+        """The swarm `snapshot` described, ready for its next step, driven by a fresh `plugin`
+        of the kind it was saved with. Anything inconsistent is refused."""
+        swarm = cls.__new__(cls)
+        world = World.restored(saved.part("world"))
+        max_speed = saved.number("max_speed", 0, 1)
+        try:
+            limits = Limits(max_speed, saved.number("max_accel", 0, max_speed))
+        except InputError as error:
+            raise saved.error("max_speed", f"and max_accel are not valid ({error})") from None
+        wander_rate = saved.number("wander_rate", 0, 1)
+        params = Params(limits, wander_rate, saved.integer("patience", 1, 10**6))
+        swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
+        swarm._restore_arrays(saved)
+        swarm._restore_rng(saved)
+        swarm.step_count = saved.integer("step", 0)
+        swarm.overlap_total = saved.integer("overlap_total", 0)
+        completed = saved.value("completed_at")
+        if not isinstance(completed, list) or len(completed) != len(world.groups):
+            raise saved.error("completed_at", "does not have one entry per group")
+        if not all(step is None or type(step) is int for step in completed):
+            raise saved.error("completed_at", "holds something other than steps")
+        swarm.completed_at = completed
+        swarm.driver = plugin.drive(swarm)
+        swarm._index_world()
+        swarm.driver.restore(saved.part("driver"))
+        return swarm
+
+    def _restore_arrays(self, saved: Snapshot) -> None:
+        n, width, height = self.world.agents, *self.world.size
+        inside = {"low": 0, "high": max(width, height) - 1}
+        self.cell = saved.array("cell", np.int64, (n, 2), **inside)
+        self.start_cell = saved.array("start_cell", np.int64, (n, 2), **inside)
+        self.direction = saved.array("direction", np.int64, (n,), 0, len(STEPS) - 1)
+        self.ahead = saved.array("ahead", np.int64, (n,), 0, 2)
+        self.offset = saved.array("offset", np.float64, (n,), 0, 1)
+        self.speed = saved.array("speed", np.float64, (n,), 0, 1)
+        self.distance = saved.array("distance", np.float64, (n,), 0)
+        self.state = saved.array("state", np.int8, (n,), 0, len(State) - 1)
+        self.filled = saved.array("filled", bool, (len(self.world.targets),))
+        self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0)
+        self.lattice = Lattice(self.world.size)
+        holder = saved.array("holder", np.int64, self.lattice.holder.shape, WALL, n - 1)
+        held = np.concatenate([self.cell + STEPS[self.direction] * k for k in (0, 1, 2)])
+        who = np.tile(np.arange(n), 3)
+        reserved = np.concatenate([np.ones(n, bool), self.ahead >= 1, self.ahead >= 2])
+        if (held[reserved] >= self.world.size).any() or (held[reserved] < 0).any():
+            raise saved.error("cell", "puts a robot or its reservation outside the arena")
+        walls = self.lattice.holder == WALL
+        seeds = self.lattice.key(self.world.seeds)
+        mine = holder[self.lattice.key(held[reserved])] == who[reserved]
+        robots_where_they_are = mine.all() and (holder >= 0).sum() == reserved.sum()
+        if (
+            not robots_where_they_are
+            or (holder[walls] != WALL).any()
+            or (holder[seeds] != SEED).any()
+        ):
+            raise saved.error("holder", "disagrees with where the robots and seeds are")
+        self.lattice.holder[:] = holder
+
+    def _restore_rng(self, saved: Snapshot) -> None:
+        try:
+            self.rng.bit_generator.state = saved.value("rng")
+        except (TypeError, ValueError, KeyError, OverflowError):
+            raise saved.error("rng", "is not a random generator's state") from None
 
     def _index_world(self) -> None:
         """Everything derived from the world's targets and seeds (again after a reshape)."""

@@ -7,11 +7,13 @@ World cells are integer ``(x, y)``, y growing downward; grids over the arena are
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.errors import InputError
 
 MARGIN = 3
@@ -58,6 +60,23 @@ class Group:
     targets: np.ndarray
     seeds: np.ndarray
 
+    @classmethod
+    def placed(
+        cls, name: str, colour: tuple[int, int, int], shape: Shape, pose: Pose, agents: int
+    ) -> Group:
+        """The group with its shape's cells and its seeds put where `pose` says."""
+        frame = shape.cells
+        return cls(
+            name,
+            colour,
+            shape,
+            pose,
+            agents,
+            frame,
+            pose.to_world(frame),
+            pose.to_world(SEED_CELLS),
+        )
+
 
 @dataclass(frozen=True, eq=False)
 class World:
@@ -83,19 +102,44 @@ class World:
     def reshaped(self, group: int, shape: Shape, pose: Pose) -> World:
         """The same arena with one group's shape (and seed pose) replaced; checked as new."""
         old = self.groups[group]
-        placed = Group(
-            old.name,
-            old.colour,
-            shape,
-            pose,
-            old.agents,
-            shape.cells,
-            pose.to_world(shape.cells),
-            pose.to_world(SEED_CELLS),
-        )
         groups = list(self.groups)
-        groups[group] = placed
+        groups[group] = Group.placed(old.name, old.colour, shape, pose, old.agents)
         world = World(self.size, tuple(groups), self.name)
+        _validate(world, starts=False)
+        return world
+
+    def snapshot(self) -> dict[str, Any]:
+        """What defines the world; the cells follow from each group's shape and pose."""
+        values: dict[str, Any] = {"name": self.name, "size": list(self.size)}
+        values["groups"] = len(self.groups)
+        for index, g in enumerate(self.groups):
+            pose = [g.pose.x, g.pose.y, g.pose.rotation]
+            values |= prefixed(
+                f"group{index}",
+                {"name": g.name, "colour": list(g.colour), "grid": g.shape.grid,
+                 "scale": g.shape.scale, "origin": list(g.shape.origin), "pose": pose,
+                 "agents": g.agents},
+            )  # fmt: skip
+        return values
+
+    @classmethod
+    def restored(cls, saved: Snapshot) -> World:
+        """The world `snapshot` described, checked as a new one would be."""
+        size = saved.integers("size", 2, 1, MAX_ARENA_CELLS)
+        groups = []
+        for index in range(saved.integer("groups", 1, 1000)):
+            part = saved.part(f"group{index}")
+            grid = part.array("grid", bool, (None, None))
+            shape = Shape(grid, part.number("scale", 0, 1), tuple(part.integers("origin", 2)))
+            x, y, rotation = part.integers("pose", 3)
+            if rotation % 90:
+                raise part.error("pose", "turns by other than quarter turns")
+            agents = part.integer("agents", 0, MAX_AGENTS)
+            colour = tuple(part.integers("colour", 3, 0, 255))
+            groups.append(
+                Group.placed(part.text("name"), colour, shape, Pose(x, y, rotation), agents)
+            )
+        world = cls((size[0], size[1]), tuple(groups), saved.text("name"))
         _validate(world, starts=False)
         return world
 
@@ -124,10 +168,10 @@ def blank_world(
     size: tuple[int, int], pose: Pose, name: str, colour: tuple[int, int, int]
 ) -> World:
     """An arena with one group's seeds and no shape yet: the editor's empty canvas."""
-    empty = np.zeros((0, 2), dtype=np.int64)
-    seeds = pose.to_world(SEED_CELLS)
-    group = Group(name, colour, Shape(np.zeros((0, 0), dtype=bool)), pose, 0, empty, empty, seeds)
-    return World(size, (group,), name)
+    group = Group.placed(name, colour, Shape(np.zeros((0, 0), dtype=bool)), pose, 0)
+    world = World(size, (group,), name)
+    _validate(world, starts=False)
+    return world
 
 
 def build_world(
@@ -160,19 +204,7 @@ def _place(specs: list[GroupSpec]) -> list[Group]:
         if pose is None:  # side by side, left to right, each seed frame at its shape's corner
             pose = Pose(next_x + 1, 1)
             next_x += 1 + shape.grid.shape[1] + GROUP_GAP
-        frame = shape.cells
-        groups.append(
-            Group(
-                spec.name,
-                spec.colour,
-                shape,
-                pose,
-                agents,
-                frame,
-                pose.to_world(frame),
-                pose.to_world(SEED_CELLS),
-            )
-        )
+        groups.append(Group.placed(spec.name, spec.colour, shape, pose, agents))
     return groups
 
 
@@ -188,16 +220,10 @@ def _auto_arena(groups: list[Group]) -> tuple[list[Group], tuple[int, int]]:
         else:
             height += 1
     offset = MARGIN - low + (np.array([width, height]) - (high - low) - 2 * MARGIN) // 2
+    dx, dy = int(offset[0]), int(offset[1])
     moved = [
-        Group(
-            g.name,
-            g.colour,
-            g.shape,
-            Pose(g.pose.x + int(offset[0]), g.pose.y + int(offset[1]), g.pose.rotation),
-            g.agents,
-            g.frame_cells,
-            g.targets + offset,
-            g.seeds + offset,
+        Group.placed(
+            g.name, g.colour, g.shape, Pose(g.pose.x + dx, g.pose.y + dy, g.pose.rotation), g.agents
         )
         for g in groups
     ]

@@ -1,14 +1,12 @@
 """Per-step traces: one CSV row every few steps, with the same figures as the metrics file.
 
-Rows go to a temporary file beside the target as the run goes (a crash loses nothing already
-written there) and it takes the target's name only when the run ends.
+Rows go to a temporary file beside the target as the run goes; it takes the target's name
+when the run ends and is removed if the run is abandoned, so no half-written trace is left.
 """
 
 from __future__ import annotations
 
 import csv
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +14,8 @@ from swarmshape.core.metrics import coverage, iou
 from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
-from swarmshape.io.files import umask
+from swarmshape.io.files import StreamedFile
+from swarmshape.runs import Observer
 
 COUNTS = {"moving": MOVING, "settled": SETTLED, "waiting": WAITING, "wandering": WANDERING}
 
@@ -41,16 +40,14 @@ def trace_row(swarm: Swarm) -> dict[str, Any]:
     return row
 
 
-class Trace:
+class Trace(Observer):
     """Writes `trace_row` every `every` steps, and always for the last step."""
 
     def __init__(self, path: Path, every: int = 1) -> None:
         if every < 1:
             raise InputError(f"--trace-every must be at least 1, got {every}")
-        self.path, self.every = Path(path), every
-        folder, stem = self.path.parent, self.path.stem
-        fd, self._tmp = tempfile.mkstemp(dir=folder, prefix=f".{stem}.", suffix=".csv")
-        self._file = os.fdopen(fd, "w", newline="", encoding="utf-8")
+        self.every = every
+        self._file = StreamedFile(path)
         self._writer: csv.DictWriter | None = None
         self._last = -1
 
@@ -58,15 +55,20 @@ class Trace:
         if swarm.step_count == self._last or (swarm.step_count % self.every and not force):
             return
         row = trace_row(swarm)
-        if self._writer is None:
-            self._writer = csv.DictWriter(self._file, fieldnames=list(row))
-            self._writer.writeheader()
-        self._writer.writerow(row)
+        try:
+            if self._writer is None:
+                self._writer = csv.DictWriter(self._file.handle, fieldnames=list(row))
+                self._writer.writeheader()
+            self._writer.writerow(row)
+        except OSError as error:
+            raise self._file.failed(error) from None
         self._last = swarm.step_count
 
     def close(self, swarm: Swarm) -> None:
         """Write the final row and give the file its name."""
         self.capture(swarm, force=True)
-        self._file.close()
-        os.chmod(self._tmp, 0o666 & ~umask())
-        os.replace(self._tmp, self.path)
+        self._file.commit()
+
+    def discard(self) -> None:
+        """Remove the rows written so far (an existing file keeps its old content)."""
+        self._file.discard()

@@ -7,6 +7,9 @@ image is seen; ``True`` marks a cell of the shape ("ink").
 from __future__ import annotations
 
 import os
+import struct
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -14,77 +17,179 @@ from PIL import Image, PngImagePlugin, UnidentifiedImageError
 
 from swarmshape.core.grid import bounding_box, crop, resample
 from swarmshape.errors import InputError
-from swarmshape.io.files import atomic_write
+from swarmshape.io.files import atomic_write, readable_file
 
 DEFAULT_CELLS = 32
-"""Long side of the grid, in cells, when the image is larger: ~300-700 cells for a silhouette."""
+"""Long side of the grid, in cells, when none is asked for and the image is larger."""
 
 DEFAULT_THRESHOLD = 0.5
+
+FORMATS = ("PNG", "GIF", "BMP", "JPEG", "WEBP")
+"""The raster formats swarmshape reads, recognised by their content, not their name."""
+
+MAX_PIXELS = 25_000_000
+"""Images with more pixels are refused from their header, before decoding (~0.6 GB to read)."""
 
 EDITOR_TAG = "swarmshape-one-cell-per-pixel"
 
 DARK_BORDER = 0.9
 """Share of dark border pixels that means "dark background" (a shape may touch the border)."""
 
+MAX_FIT = 4096
+"""Longest side ``--fit agents`` tries (a million robots need about 1,130 across)."""
+
+LOST = 0.5
+"""A shape keeping less than this share of the picture's ink earns a warning."""
+
+DECODING_ERRORS = (OSError, SyntaxError, ValueError, EOFError, IndexError, TypeError, struct.error,
+                   ZeroDivisionError, RuntimeError)  # fmt: skip
+"""What Pillow's decoders raise on damaged files (each is turned into one line)."""
+
 
 class BitmapError(InputError):
     """An image that cannot become a shape; the message says which file and why."""
 
 
+class ShapeWarning(UserWarning):
+    """The image became a shape, but not the one the picture suggests; the message says why
+    and which option helps."""
+
+
+@dataclass(frozen=True, eq=False)
+class Picture:
+    """An image's ink per pixel (0 or 1), cropped to the ink, before it is sized into cells."""
+
+    path: Path
+    ink: np.ndarray
+    one_cell_per_pixel: bool
+    near_threshold: float
+    """Share of opaque pixels within 0.1 of the threshold: high for a low-contrast photo."""
+
+
 def load_grid(
     path: str | os.PathLike[str],
     *,
-    cells: int = DEFAULT_CELLS,
+    cells: int | None = None,
     threshold: float = DEFAULT_THRESHOLD,
     invert: bool = False,
 ) -> np.ndarray:
-    """Read any image Pillow can open and return its ink as a cropped boolean grid.
+    """Read an image and return its ink as a cropped boolean grid, `cells` across its long
+    side (None: the image's own size, at most `DEFAULT_CELLS`).
 
     Transparent pixels are never ink. Among opaque pixels, ink is the darker side of
     ``threshold`` (luminance 0..1) on a light background; a border at least 90 % dark with
     light pixels inside means a dark background and light ink; ``invert`` forces light ink.
-    Images wider or taller than ``cells`` are downscaled by area averaging, so a cell is ink
-    when at least half of it is.
+    Larger images are shrunk by area averaging (a cell is ink when at least half of it is),
+    smaller ones grown cell for pixel; drawings saved by the editor keep one cell per pixel.
     """
+    return grid_of(read_picture(path, threshold=threshold, invert=invert), cells)
+
+
+def read_picture(
+    path: str | os.PathLike[str], *, threshold: float = DEFAULT_THRESHOLD, invert: bool = False
+) -> Picture:
+    """The image's ink, or one line saying why there is none to read."""
     path = Path(path)
-    if cells < 1:
-        raise BitmapError(f"--cells must be at least 1, got {cells}")
     if not 0.0 < threshold < 1.0:
         raise BitmapError(f"--threshold must be between 0 and 1, got {threshold}")
     rgba, one_cell_per_pixel = _open_rgba(path)
-    if one_cell_per_pixel:
-        cells = max(cells, *rgba.shape[:2])
-    ink = ink_fraction(rgba, threshold=threshold, invert=invert)
+    ink, luminance, opaque = ink_fraction(rgba, threshold=threshold, invert=invert)
+    near = float(np.mean(np.abs(luminance[opaque] - threshold) < 0.1)) if opaque.any() else 0.0
     if not ink.any():
-        raise BitmapError(f"{path}: no shape found (the image has no ink; try --invert)")
-    grid = crop(resample(bounding_box(ink), cells))
+        hint = "try --invert" if near < 0.5 else "try another --threshold or --invert"
+        raise BitmapError(f"{path}: no shape found (the image has no ink; {hint})")
+    return Picture(path, bounding_box(ink), one_cell_per_pixel, near)
+
+
+def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
+    """The picture as a grid `cells` across (see `load_grid`); a warning when most of its
+    ink is lost on the way, naming the option that helps."""
+    if cells is not None and cells < 1:
+        raise BitmapError(f"--cells must be at least 1, got {cells}")
+    long_side = max(picture.ink.shape)
+    if picture.one_cell_per_pixel or (cells is None and long_side <= DEFAULT_CELLS):
+        cells = long_side
+    grid = crop(resample(picture.ink, cells or DEFAULT_CELLS))
     if not grid.any():
-        raise BitmapError(f"{path}: the shape vanishes at --cells {cells}; raise --cells")
+        raise BitmapError(
+            f"{picture.path}: the shape vanishes at --cells {cells}; {_help(picture)}"
+        )
+    expected = picture.ink.mean() * grid.size if grid.size > 2 else 1
+    if grid.sum() < LOST * expected or grid.sum() <= 2 < picture.ink.sum():
+        warnings.warn(
+            f"{picture.path}: the shape keeps {int(grid.sum())} cells of a picture that suggests "
+            f"about {max(3, round(expected))}; {_help(picture)}",
+            ShapeWarning,
+            stacklevel=2,
+        )
     return grid
+
+
+def grid_for(picture: Picture, robots: int) -> np.ndarray:
+    """The largest grid of the picture with at most `robots` cells (``--fit agents``)."""
+
+    def count(cells: int) -> int:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ShapeWarning)
+            try:
+                return int(grid_of(picture, cells).sum())
+            except BitmapError:  # vanished: too small
+                return 0
+
+    low, high = 1, 2
+    while count(high) <= robots and high < MAX_FIT:
+        low, high = high, 2 * high
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (middle, high) if count(middle) <= robots else (low, middle)
+    if count(low) == 0:
+        raise BitmapError(f"{picture.path}: too few robots ({robots}) to draw any of its shape")
+    return grid_of(picture, low)
+
+
+def _help(picture: Picture) -> str:
+    """The option most likely to bring the shape back."""
+    if picture.near_threshold >= 0.5:
+        return "this is a low-contrast image: move --threshold (0..1) toward its grey"
+    return "raise --cells"
 
 
 def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
     """Pixels as RGBA floats, and whether the editor wrote the file (one cell per pixel)."""
-    if not path.exists():
-        raise BitmapError(f"{path}: no such file")
-    if path.is_dir():
-        raise BitmapError(f"{path}: is a directory, expected an image or a .toml scenario")
+    readable_file(path, "an image or a .toml scenario", BitmapError)
     try:
-        with Image.open(path) as image:
-            image.seek(0)  # first frame of an animation
-            rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
-            return rgba, image.info.get(EDITOR_TAG) == "1"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # Pillow's remarks are not the user's business
+            with Image.open(path, formats=FORMATS) as image:
+                width, height = image.size
+                if width * height > MAX_PIXELS:
+                    raise BitmapError(
+                        f"{path}: image too large ({width}x{height} pixels, over "
+                        f"{MAX_PIXELS:,}); shrink it first"
+                    )
+                image.seek(0)  # first frame of an animation
+                rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+                return rgba, image.info.get(EDITOR_TAG) == "1"
     except UnidentifiedImageError:
-        raise BitmapError(f"{path}: not an image Pillow can read") from None
-    except Image.DecompressionBombError:
-        limit = Image.MAX_IMAGE_PIXELS
-        raise BitmapError(f"{path}: image too large (over {limit} pixels)") from None
-    except OSError as error:
-        raise BitmapError(f"{path}: cannot read image ({error})") from None
+        formats = ", ".join(FORMATS[:-1]) + f" or {FORMATS[-1]}"
+        raise BitmapError(f"{path}: not an image swarmshape reads ({formats})") from None
+    except Image.DecompressionBombError:  # Pillow's own, far larger limit, met on opening
+        raise BitmapError(
+            f"{path}: image too large (over {MAX_PIXELS:,} pixels); shrink it first"
+        ) from None
+    except DECODING_ERRORS as error:
+        raise BitmapError(f"{path}: cannot read image ({_reason(error)})") from None
 
 
-def ink_fraction(rgba: np.ndarray, *, threshold: float, invert: bool) -> np.ndarray:
-    """Per pixel 1.0 for ink, 0.0 for background, decided as `load_grid` documents."""
+def _reason(error: BaseException) -> str:
+    return str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+
+
+def ink_fraction(
+    rgba: np.ndarray, *, threshold: float, invert: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per pixel 1.0 for ink, 0.0 for background, decided as `load_grid` documents; and the
+    luminance and opacity it was decided from."""
     opaque = rgba[..., 3] >= 0.5
     luminance = rgba[..., :3] @ np.array([0.299, 0.587, 0.114])
     border = np.concatenate([opaque[0], opaque[-1], opaque[:, 0], opaque[:, -1]])
@@ -98,7 +203,7 @@ def ink_fraction(rgba: np.ndarray, *, threshold: float, invert: bool) -> np.ndar
         ink = light  # a dark background with something light on it
     else:
         ink = ~light
-    return (ink & opaque).astype(np.float64)
+    return (ink & opaque).astype(np.float64), luminance, opaque
 
 
 def save_grid(grid: np.ndarray, path: str | os.PathLike[str]) -> None:

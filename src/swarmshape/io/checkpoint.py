@@ -1,53 +1,105 @@
-"""Saving and loading a whole run, to resume it exactly: every array, the strategy, the
-message queue, the path fields and the random generator's state go into one file.
+"""Saved runs on disk: numpy arrays and a JSON manifest in one ``.npz`` file, with no code in it.
 
-The format is Python's pickle behind a swarmshape header, so load only state files you trust.
+The manifest names the format and its version, holds every plain value, lists the arrays, and
+carries a SHA-256 over all of it, so a damaged file is refused rather than resumed differently.
+Arrays are read with ``allow_pickle=False`` and the whole file is size-checked before anything
+is decompressed, so a crafted file can neither run code nor exhaust memory.
 """
 
 from __future__ import annotations
 
-import pickle
-from dataclasses import dataclass
+import hashlib
+import json
+import zipfile
+import zlib
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from swarmshape.core.swarm import Swarm
+import numpy as np
+
 from swarmshape.errors import InputError
-from swarmshape.io.files import atomic_write
+from swarmshape.io.files import atomic_write, readable_file
 
-HEADER = b"swarmshape state 1\n"
-
-
-@dataclass(frozen=True)
-class Saved:
-    """A run as saved: the swarm, and the description it was built from."""
-
-    swarm: Swarm
-    config: dict[str, Any]
+FORMAT = "swarmshape state"
+VERSION = 2
+MANIFEST = "manifest"
+MAX_BYTES = 8 * 2**30
+"""Largest state, uncompressed: about what a million robots on the largest arena take."""
+PICKLE_HEADER = b"swarmshape state 1\n"
+"""How the first, pickle-based format began; such files are refused, never unpickled."""
 
 
-def save_state(swarm: Swarm, path: Path, config: dict[str, Any]) -> None:
-    """Write the run to `path` atomically."""
-    saved = Saved(swarm, config)
-    payload = HEADER + pickle.dumps(saved, protocol=pickle.HIGHEST_PROTOCOL)
-    atomic_write(path, lambda tmp: Path(tmp).write_bytes(payload))
+def save_state(path: Path, values: Mapping[str, Any]) -> None:
+    """Write `values` (arrays, and JSON numbers, text, lists, mappings) to `path` atomically."""
+    arrays = {
+        key: np.ascontiguousarray(v) for key, v in values.items() if isinstance(v, np.ndarray)
+    }
+    plain = {key: v for key, v in values.items() if not isinstance(v, np.ndarray)}
+    manifest = {"format": FORMAT, "version": VERSION, "values": plain, "arrays": sorted(arrays)}
+    manifest["checksum"] = _checksum(manifest, arrays)
+    text = json.dumps(manifest, sort_keys=True, allow_nan=False).encode("utf-8")
+    members = {MANIFEST: np.frombuffer(text, dtype=np.uint8), **arrays}
+
+    def write(tmp: str) -> None:
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(handle, **members)
+
+    atomic_write(path, write)
 
 
-def load_state(path: Path) -> Saved:
-    """Read a run saved by `save_state`; anything else is refused with a clear message."""
-    path = Path(path)
+def load_state(path: Path) -> dict[str, Any]:
+    """The values a state file holds; anything else (not ours, damaged, too large) is refused
+    with one line."""
+    path = readable_file(Path(path), "a state file")
+    with path.open("rb") as handle:
+        start = handle.read(len(PICKLE_HEADER))
+    if start == PICKLE_HEADER:
+        raise InputError(
+            f"{path}: a state file of an older swarmshape (pickle, which is unsafe to load); "
+            "run it again and save it with this version"
+        )
     try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such state file") from None
-    except OSError as error:
-        raise InputError(f"{path}: cannot read state ({error.strerror})") from None
-    if not data.startswith(HEADER):
+        with zipfile.ZipFile(path) as archive:
+            names = {info.filename: info.file_size for info in archive.infolist()}
+    except (zipfile.BadZipFile, OSError, ValueError):
+        raise InputError(
+            f"{path}: not a swarmshape state file (write one with --save-state)"
+        ) from None
+    if f"{MANIFEST}.npy" not in names:
         raise InputError(f"{path}: not a swarmshape state file (write one with --save-state)")
+    if sum(names.values()) > MAX_BYTES:
+        raise InputError(f"{path}: state file too large (over {MAX_BYTES // 2**30} GiB unpacked)")
     try:
-        saved = pickle.loads(data[len(HEADER) :])
-    except Exception as error:  # a truncated or damaged file can fail in many ways
-        raise InputError(f"{path}: damaged state file ({type(error).__name__})") from None
-    if not isinstance(saved, Saved):
-        raise InputError(f"{path}: not a swarmshape state file")
-    return saved
+        with np.load(path, allow_pickle=False) as archive:
+            members = {name: archive[name] for name in archive.files}
+        manifest = json.loads(members.pop(MANIFEST).tobytes().decode("utf-8"))
+    except (ValueError, OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeError):
+        raise InputError(f"{path}: damaged state file (it cannot be read)") from None
+    return _checked(path, manifest, members)
+
+
+def _checked(path: Path, manifest: Any, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        raise InputError(f"{path}: not a swarmshape state file (write one with --save-state)")
+    if manifest.get("version") != VERSION:
+        raise InputError(
+            f"{path}: a state file of format version {manifest.get('version')!r}; this "
+            f"swarmshape reads version {VERSION}"
+        )
+    listed, plain = manifest.get("arrays"), manifest.get("values")
+    if listed != sorted(arrays) or not isinstance(plain, dict):
+        raise InputError(f"{path}: damaged state file (its parts do not match its list)")
+    claimed = manifest.pop("checksum", None)
+    if claimed != _checksum(manifest, arrays):
+        raise InputError(f"{path}: damaged state file (its checksum does not match)")
+    return {**plain, **arrays}
+
+
+def _checksum(manifest: Mapping[str, Any], arrays: Mapping[str, np.ndarray]) -> str:
+    digest = hashlib.sha256(json.dumps(manifest, sort_keys=True, allow_nan=False).encode())
+    for key in sorted(arrays):
+        array = np.ascontiguousarray(arrays[key])
+        digest.update(f"{key}|{array.dtype.str}|{array.shape}|".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()

@@ -1,51 +1,137 @@
-"""Writing files so that a crash or a full disk never leaves a user's file half-written."""
+"""Files in and out, so that a crash, a full disk or an odd path never loses a user's work.
+
+Inputs must be regular files (a pipe would hang the read). Outputs are checked before a run
+starts and written to a temporary file beside their target, then renamed over it in one step;
+a symlink is written through to the file it points to. A failure to write is one line, like
+any other bad input.
+"""
 
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from swarmshape.errors import InputError
+
+TEMP_PREFIX = ".swarmshape-"
+"""Temporary files start with this (hidden, and short, so any legal name still fits)."""
+
+
+class OutputError(InputError):
+    """An output that cannot be written; the message names it and says why."""
 
 
 def atomic_write(path: str | os.PathLike[str], write: Callable[[str], object]) -> None:
     """Call ``write(temp_path)`` beside `path`, then rename it over `path` in one step.
 
-    The temporary name keeps the final suffix so that writers which pick a format from the
-    extension (Pillow, pygame) still do.
+    The temporary name keeps a short final suffix so that writers which pick a format from the
+    extension (Pillow, pygame) still do. A symlink is written through to its target.
     """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    path = Path(os.path.realpath(path))
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=TEMP_PREFIX, suffix=path.suffix[-16:])
+    except OSError as error:
+        raise OutputError(f"{path}: cannot write there ({error.strerror})") from None
     os.close(fd)
     try:
         write(tmp)
         os.chmod(tmp, 0o666 & ~umask())  # mkstemp makes it private; give it the usual mode
         os.replace(tmp, path)
+    except OSError as error:
+        Path(tmp).unlink(missing_ok=True)
+        raise OutputError(f"{path}: cannot write it ({error.strerror or error})") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
 
 
-def check_output(path: Path, flag: str, *, may_replace: bool) -> None:
-    """Refuse, before a run, an output that cannot be written there or that would replace an
-    existing file (or fill a non-empty folder, for ``--frames``) without `may_replace`."""
-    folder_output = flag == "--frames"
-    replaces = path.is_file() or (folder_output and path.is_dir() and any(path.iterdir()))
-    if replaces and not may_replace:
-        raise InputError(f"{path}: {flag} would overwrite it; add --force to allow that")
-    if not folder_output and path.is_dir():
-        raise InputError(f"{path}: {flag} needs a file name, and this is a folder")
-    # a file goes into an existing folder; the frames folder may be made, inside one
-    existing = path if folder_output and path.is_dir() else path.parent
-    if not existing.is_dir() or not os.access(existing, os.W_OK):
-        raise InputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
+class StreamedFile:
+    """A text output written as a run goes (rows of a trace), kept under a temporary name
+    beside its target and renamed over it at `commit`; `discard` leaves nothing behind."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = Path(os.path.realpath(path))
+        try:
+            fd, self._tmp = tempfile.mkstemp(dir=self.path.parent, prefix=TEMP_PREFIX)
+        except OSError as error:
+            raise OutputError(f"{path}: cannot write there ({error.strerror})") from None
+        self.handle = os.fdopen(fd, "w", newline="", encoding="utf-8")
+
+    def commit(self) -> None:
+        try:
+            self.handle.close()
+            os.chmod(self._tmp, 0o666 & ~umask())
+            os.replace(self._tmp, self.path)
+        except OSError as error:
+            self.discard()
+            raise OutputError(f"{self.path}: cannot write it ({error.strerror})") from None
+
+    def failed(self, error: OSError) -> OutputError:
+        """Give up after a failed write: remove the partial file, and say why in one line."""
+        self.discard()
+        return OutputError(f"{self.path}: cannot write it ({error.strerror or error})")
+
+    def discard(self) -> None:
+        self.handle.close()
+        Path(self._tmp).unlink(missing_ok=True)
 
 
 def write_text(path: str | os.PathLike[str], text: str) -> None:
     """Atomically write `text` (UTF-8)."""
     atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
+
+
+def readable_file(path: Path, expected: str, error: type[InputError] = InputError) -> Path:
+    """`path` if it is a regular file (a symlink counts as what it points to); a folder, a pipe,
+    a device or a missing file is refused in one line (an `error`) before anything reads it.
+    `expected` says what it should be, e.g. "an image"."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise error(f"{path}: no such file") from None
+    except OSError as failure:
+        raise error(f"{path}: cannot read it ({failure.strerror})") from None
+    if stat.S_ISDIR(mode):
+        raise error(f"{path}: is a directory, expected {expected}")
+    if not stat.S_ISREG(mode):
+        raise error(f"{path}: is not a regular file (a pipe or a device?), expected {expected}")
+    return path
+
+
+def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = False) -> None:
+    """Refuse, before a run, an output that cannot be written there, that is not a regular file
+    (or, for a `folder` output, a folder), or that would replace an existing file (or fill a
+    non-empty folder) without `may_replace`. A symlink counts as the file it points to."""
+    target = Path(os.path.realpath(path))
+    if target.exists():
+        mode = target.stat().st_mode
+        if folder and not stat.S_ISDIR(mode):
+            raise OutputError(f"{path}: {flag} needs a folder, and this is not one")
+        if not folder and stat.S_ISDIR(mode):
+            raise OutputError(f"{path}: {flag} needs a file name, and this is a folder")
+        if not folder and not stat.S_ISREG(mode):
+            raise OutputError(f"{path}: {flag} would replace a pipe or a device; name a file")
+        if not may_replace and (not folder or any(target.iterdir())):
+            raise OutputError(f"{path}: {flag} would overwrite it; add --force to allow that")
+    existing = target if folder and target.is_dir() else target.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK):
+        raise OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
+    longest = os.pathconf(existing, "PC_NAME_MAX")
+    if len(target.name.encode()) > longest:
+        raise OutputError(f"{path}: {flag} name is longer than the {longest} bytes allowed")
+
+
+def distinct_outputs(outputs: Iterable[tuple[str, Path]]) -> None:
+    """Refuse two options naming the same file: one would silently overwrite the other."""
+    seen: dict[str, str] = {}
+    for flag, path in outputs:
+        key = os.path.realpath(path)
+        if key in seen:
+            raise OutputError(f"{path}: {seen[key]} and {flag} both write it; name two files")
+        seen[key] = flag
 
 
 def umask() -> int:

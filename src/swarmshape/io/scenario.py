@@ -31,7 +31,8 @@ from PIL import ImageColor
 from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.world import GroupSpec, World
 from swarmshape.errors import InputError
-from swarmshape.io.bitmap import DEFAULT_CELLS, DEFAULT_THRESHOLD, load_grid
+from swarmshape.io.bitmap import DEFAULT_THRESHOLD, grid_for, grid_of, load_grid, read_picture
+from swarmshape.io.files import readable_file
 
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
@@ -49,7 +50,7 @@ class ScenarioError(InputError):
 class ImageOptions:
     """How images become grids (the loader's knobs)."""
 
-    cells: int = DEFAULT_CELLS
+    cells: int | None = None
     threshold: float = DEFAULT_THRESHOLD
     invert: bool = False
 
@@ -63,19 +64,29 @@ class Scenario:
     arena: tuple[int, int] | None = None
 
 
-def load_scenario(path: str | Path, image: ImageOptions | None = None) -> Scenario:
-    """Read an image (one group) or a ``.toml`` scenario."""
+def load_scenario(
+    path: str | Path, image: ImageOptions | None = None, fit: int | None = None
+) -> Scenario:
+    """Read an image (one group) or a ``.toml`` scenario. With `fit`, an image is sized to
+    have as many cells as possible up to that many (to fill that many robots)."""
     path = Path(path)
     image = image or ImageOptions()
     if path.suffix.lower() != ".toml":
-        grid = load_grid(path, cells=image.cells, threshold=image.threshold, invert=image.invert)
+        picture = read_picture(path, threshold=image.threshold, invert=image.invert)
+        grid = grid_of(picture, image.cells) if fit is None else grid_for(picture, fit)
         return Scenario(path.name, (GroupSpec(path.stem, Shape(grid), parse_colour(PALETTE[0])),))
+    if fit is not None:
+        raise ScenarioError(f"{path}: --fit agents sizes one image; set cells per group instead")
     data, where = _read_toml(path)
     _settings(data, where)  # a mistyped setting is an error wherever the file is read
     groups = data.get("groups")
     if not isinstance(groups, list) or not groups:
         raise ScenarioError(f"{path}: needs at least one [[groups]] table with a shape")
     specs = tuple(_group(where, index, table, image) for index, table in enumerate(groups))
+    names = [spec.name for spec in specs]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ScenarioError(f"{path}: two groups are named {twice[0]!r}; give each its own name")
     arena = None
     if "arena" in data:
         arena = where.pair(data["arena"], "arena")
@@ -91,12 +102,13 @@ def scenario_settings(path: str | Path) -> dict[str, Any]:
 
 
 def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
-    if not path.is_file():
-        raise ScenarioError(f"{path}: no such file")
+    readable_file(path, "a .toml scenario", ScenarioError)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ScenarioError(f"{path}: not valid TOML ({error})") from None
+    except OSError as error:
+        raise ScenarioError(f"{path}: cannot read it ({error.strerror})") from None
     where = _Where(path)
     where.known(data, TOP_KEYS | {"groups"}, "top level")
     return data, where
@@ -108,6 +120,11 @@ def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
     for key, kind in (("strategy", str), ("order", str), ("seed", int), ("max_steps", int)):
         if key in settings:
             where.typed(settings[key], kind, key)
+    if ":" in settings.get("strategy", ""):
+        raise ScenarioError(
+            f"{where.path}: strategy = {settings['strategy']!r} points at code, and a scenario is "
+            "data: name a registered or installed strategy, or give --strategy on the command line"
+        )
     for key in ("max_speed", "max_accel"):
         if key in settings:
             settings[key] = float(where.typed(settings[key], (int, float), key))
@@ -122,9 +139,10 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
     if "shape" not in table:
         raise ScenarioError(f"{where.path}: {label} needs a shape (an image path)")
     shape_path = where.path.parent / where.typed(table["shape"], str, f"{label}.shape")
+    cells = table.get("cells", image.cells)
     grid = load_grid(
         shape_path,
-        cells=where.typed(table.get("cells", image.cells), int, f"{label}.cells"),
+        cells=None if cells is None else where.typed(cells, int, f"{label}.cells"),
         threshold=float(
             where.typed(table.get("threshold", image.threshold), (int, float), f"{label}.threshold")
         ),
@@ -187,7 +205,7 @@ class _Where:
 def read_start_cells(path: Path, world: World) -> np.ndarray:
     """Start cells ``(agents, 2)`` from a CSV with columns ``x,y`` (one row per agent, groups
     in scenario order): free arena cells, none on a shape or a seed, no two alike."""
-    path = Path(path)
+    path = readable_file(Path(path), "a CSV of start cells")
     try:
         with path.open(newline="", encoding="utf-8") as handle:
             rows = list(csv.DictReader(handle))
@@ -196,11 +214,13 @@ def read_start_cells(path: Path, world: World) -> np.ndarray:
     except (UnicodeDecodeError, csv.Error) as error:
         raise InputError(f"{path}: not a CSV of start positions ({error})") from None
     try:
-        cells = np.array([[int(row["x"]), int(row["y"])] for row in rows], dtype=np.int64)
+        numbers = [(int(row["x"]), int(row["y"])) for row in rows]
     except (KeyError, TypeError, ValueError):
         raise InputError(f"{path}: needs integer columns x,y (cells), one row per agent") from None
-    if len(cells) != world.agents:
-        raise InputError(f"{path}: {len(cells)} start positions for {world.agents} agents")
+    if len(numbers) != world.agents:
+        robots = f"{world.agents} robot{'' if world.agents == 1 else 's'}"
+        raise InputError(f"{path}: {len(numbers)} start positions for {robots}")
+    cells = np.array([(-1, -1) if max(abs(x), abs(y)) > 2**62 else (x, y) for x, y in numbers])
     allowed = np.zeros(world.size, dtype=bool)
     free = world.start_cells()
     allowed[free[:, 0], free[:, 1]] = True
@@ -209,11 +229,11 @@ def read_start_cells(path: Path, world: World) -> np.ndarray:
     ok[inside] = allowed[cells[inside, 0], cells[inside, 1]]
     bad = np.flatnonzero(~ok)
     if len(bad):
-        x, y = cells[bad[0]]
+        x, y = numbers[bad[0]]
         raise InputError(
             f"{path}: row {bad[0] + 2} ({x},{y}) is not a free start cell "
             "(outside the arena, or on or next to a shape or a seed)"
         )
     if len(np.unique(cells, axis=0)) < len(cells):
-        raise InputError(f"{path}: two agents start on the same cell")
+        raise InputError(f"{path}: two robots start on the same cell")
     return cells

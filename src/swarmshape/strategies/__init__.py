@@ -2,15 +2,21 @@
 
 A strategy subclasses `swarmshape.core.steering.Strategy`. `register` makes it reachable as
 ``--strategy NAME``; installed packages offer theirs under the entry-point group
-``swarmshape.strategies``; on the command line ``package.module:Class`` also works. The README's
+``swarmshape.strategies``. Code can also be named directly, ``path/to/file.py:Class`` or
+``package.module:Class``, but only by the user on the command line or from Python: scenario and
+state files are data and name strategies only by registered or installed names. The README's
 "Writing a strategy" shows a complete one, and ``examples/my_strategy.py`` runs it.
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import inspect
+import sys
 from importlib.metadata import entry_points
+from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from swarmshape.core.steering import Strategy
@@ -35,9 +41,15 @@ def available() -> dict[str, type[Strategy]]:
     return found
 
 
+def is_code(name: str) -> bool:
+    """Whether `name` points at code (``file.py:Class`` or ``module:Class``) rather than naming
+    a registered or installed strategy."""
+    return ":" in name
+
+
 def get(name: str) -> type[Strategy]:
-    """The strategy class called `name`, or named ``package.module:Class``."""
-    if ":" in name:
+    """The strategy class called `name`, or found at ``file.py:Class`` or ``module:Class``."""
+    if is_code(name):
         cls = _import(name)
     else:
         known = available()
@@ -59,15 +71,30 @@ def create(strategy: str | type[Strategy], **options: Any) -> Strategy:
 
 
 def _import(spec: str) -> type[Strategy]:
-    module_name, _, attribute = spec.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as error:
-        raise InputError(f"strategy {spec!r}: cannot import {module_name} ({error})") from None
+    module_name, _, attribute = spec.rpartition(":")
+    if module_name.endswith(".py"):
+        module = _load_file(Path(module_name), spec)
+    else:
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as error:
+            raise InputError(f"strategy {spec!r}: cannot import {module_name} ({error})") from None
     try:
         return getattr(module, attribute)
     except AttributeError:
         raise InputError(f"strategy {spec!r}: {module_name} has no {attribute}") from None
+
+
+def _load_file(path: Path, spec: str) -> ModuleType:
+    """Run a strategy file the user named, as a module of its own."""
+    if not path.is_file():
+        raise InputError(f"strategy {spec!r}: no such file {path}")
+    name = f"swarmshape_strategy_{path.stem}"
+    found = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(found)
+    sys.modules[name] = module  # so that its classes can be found again, e.g. by name
+    found.loader.exec_module(module)
+    return module
 
 
 from swarmshape.strategies import concurrent, paper  # noqa: E402,F401  (registers built-ins)

@@ -13,10 +13,11 @@ import numpy as np
 
 from swarmshape.core.messages import SEEDS
 from swarmshape.core.motion import Motion
+from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import MOVING, WANDERING
 from swarmshape.core.steering import Strategy, SwarmView
 from swarmshape.strategies import register
-from swarmshape.strategies.fill_order import DEFAULT_ORDER, fill_sequence
+from swarmshape.strategies.fill_order import DEFAULT_ORDER, ORDERS, fill_sequence
 
 
 @register
@@ -55,6 +56,20 @@ class Paper(Strategy):
             sequence = first[g] + fill_sequence(world, g, self.order, swarm.rng)
             self._sequence.append(sequence[~taken[sequence]])
         self._next = [0] * len(world.groups)
+
+    def restore(self, saved: Snapshot, swarm: SwarmView) -> None:
+        """Take the saved fill orders back, checked against the world they order."""
+        super().restore(saved, swarm)
+        groups, targets = len(swarm.world.groups), len(swarm.targets)
+        if self.order not in ORDERS:
+            raise saved.error("order", f"is {self.order!r}, not one of {', '.join(ORDERS)}")
+        if len(self._sequence) != groups or len(self._next) != groups:
+            raise saved.error("_sequence", f"does not have one order per group ({groups})")
+        for sequence, done in zip(self._sequence, self._next, strict=True):
+            in_range = sequence.dtype.kind == "i" and ((sequence >= 0) & (sequence < targets)).all()
+            counted = type(done) is int and 0 <= done <= len(sequence)
+            if sequence.ndim != 1 or not in_range or not counted:
+                raise saved.error("_sequence", "names targets that do not exist")
 
     def on_settled(self, swarm: SwarmView, agents: np.ndarray) -> None:
         for agent in agents.tolist():

@@ -16,6 +16,7 @@ import pygame
 from scipy import ndimage
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.errors import InputError
 from swarmshape.io.bitmap import save_grid
 
 HISTORY = 200
@@ -323,7 +324,7 @@ class Editor:
             return False
         try:
             save_grid(shape.grid, path)
-        except OSError as error:
+        except (OSError, InputError) as error:
             self.message = f"not saved: {error}"
             return False
         self.message = f"saved {path}"

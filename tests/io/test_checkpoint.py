@@ -1,0 +1,181 @@
+"""Saved runs: resuming is exact for every strategy, and a state file never runs code, never
+loads damaged, and never hangs on something that is not a file."""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import threading
+
+import numpy as np
+import pytest
+
+from swarmshape.cli import main
+from swarmshape.core.metrics import run_metrics
+from swarmshape.errors import InputError
+from swarmshape.io.checkpoint import PICKLE_HEADER, load_state
+from swarmshape.runs import build, configure, resume, run, save
+from swarmshape.strategies import available
+from tests.conftest import SHAPES
+
+
+def config_for(strategy: str):
+    return configure(SHAPES / "horseshoe.png", cells=12, seed=5, strategy=strategy, agents=60)
+
+
+def metrics_of(swarm) -> str:
+    return json.dumps(run_metrics(swarm), sort_keys=True)
+
+
+@pytest.mark.parametrize("strategy", sorted(available()))
+def test_resuming_at_any_step_gives_the_uninterrupted_run(strategy, tmp_path):
+    config = config_for(strategy)
+    whole = metrics_of(run(build(config), max_steps=50_000))
+    for cut in (0, 1, 23, 150):
+        swarm = run(build(config), max_steps=cut)
+        save(swarm, tmp_path / "s.state", config)
+        again, resumed = resume(tmp_path / "s.state")
+        assert again == config
+        assert metrics_of(run(resumed, max_steps=50_000)) == whole, f"cut at step {cut}"
+
+
+def test_the_paper_horseshoe_resumed_at_step_37_forms_as_if_never_stopped(tmp_path):
+    """The reported case: the resumed run used to hold two copies of the occupancy grid."""
+    common = [str(SHAPES / "horseshoe.png"), "--strategy", "paper", "--seed", "11", "--headless"]
+    assert main([*common, "--metrics", str(tmp_path / "whole.json")]) == 0
+    assert main([*common, "--max-steps", "37", "--save-state", str(tmp_path / "h.state")]) == 3
+    assert main(["--load-state", str(tmp_path / "h.state"), "--headless", "--metrics",
+                 str(tmp_path / "resumed.json")]) == 0  # fmt: skip
+    whole, resumed = (
+        json.loads((tmp_path / f"{n}.json").read_text()) for n in ("whole", "resumed")
+    )
+    assert resumed == whole and resumed["coverage"] == 1.0
+
+
+def test_a_pickle_state_file_is_refused_without_being_unpickled(tmp_path):
+    witness = tmp_path / "ran"
+
+    class Exploit:
+        def __reduce__(self):
+            return (open, (str(witness), "w"))
+
+    path = tmp_path / "old.state"
+    path.write_bytes(PICKLE_HEADER + pickle.dumps(Exploit()))
+    with pytest.raises(InputError, match="older swarmshape"):
+        load_state(path)
+    assert not witness.exists()
+
+
+def saved_state(tmp_path):
+    config = config_for("optimal")
+    path = tmp_path / "s.state"
+    save(run(build(config), max_steps=20), path, config)
+    return path, config
+
+
+def test_every_flipped_byte_is_refused_or_changes_nothing(tmp_path):
+    path, _ = saved_state(tmp_path)
+    expected = metrics_of(run(resume(path)[1], max_steps=50_000))
+    original = path.read_bytes()
+    rng = np.random.default_rng(0)
+    refused = 0
+    for position in rng.choice(len(original), 60, replace=False):
+        damaged = bytearray(original)
+        damaged[position] ^= 1 << int(rng.integers(8))
+        path.write_bytes(bytes(damaged))
+        try:
+            _, swarm = resume(path)
+        except InputError as error:
+            assert "\n" not in str(error)
+            refused += 1
+            continue
+        assert metrics_of(run(swarm, max_steps=50_000)) == expected, f"byte {position}"
+    assert refused > 40, "flips in the data must be caught"
+
+
+def test_a_changed_value_fails_the_checksum(tmp_path):
+    path, _ = saved_state(tmp_path)
+    with np.load(path, allow_pickle=False) as stored:
+        members = {name: stored[name] for name in stored.files}
+    manifest = json.loads(members.pop("manifest").tobytes())
+    manifest["values"]["swarm.step"] += 1
+    text = json.dumps(manifest).encode()
+    with path.open("wb") as handle:  # np.savez would add .npz to a name
+        np.savez(handle, manifest=np.frombuffer(text, np.uint8), **members)
+    with pytest.raises(InputError, match="checksum does not match"):
+        load_state(path)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"", "not a swarmshape state file"),
+        (b"PK\x03\x04garbage", "not a swarmshape state file"),
+        (b"hello, world", "not a swarmshape state file"),
+    ],
+)
+def test_foreign_files_are_refused_in_one_line(tmp_path, content, message):
+    path = tmp_path / "x.state"
+    path.write_bytes(content)
+    with pytest.raises(InputError, match=message):
+        load_state(path)
+
+
+def test_a_npz_of_someone_else_is_not_a_state(tmp_path):
+    path = tmp_path / "data.npz"
+    np.savez(path, values=np.arange(3))
+    with pytest.raises(InputError, match="not a swarmshape state file"):
+        load_state(path)
+
+
+def test_a_fifo_is_refused_at_once_instead_of_hanging(tmp_path):
+    fifo = tmp_path / "pipe.state"
+    os.mkfifo(fifo)
+    outcome = []
+    thread = threading.Thread(target=lambda: outcome.append(_refusal(fifo)), daemon=True)
+    thread.start()
+    thread.join(5)
+    assert outcome and "not a regular file" in outcome[0]
+
+
+def _refusal(path) -> str:
+    try:
+        load_state(path)
+    except InputError as error:
+        return str(error)
+    return "loaded"
+
+
+def test_a_run_saved_with_code_resumes_only_when_that_code_is_named_again(tmp_path):
+    strategy_file = tmp_path / "mine.py"
+    strategy_file.write_text(
+        "from swarmshape.strategies.concurrent import Optimal\n"
+        "class Mine(Optimal):\n    name = 'mine'\n"
+    )
+    spec = f"{strategy_file}:Mine"
+    state = tmp_path / "s.state"
+    common = [str(SHAPES / "line.png"), "--headless", "--seed", "2"]
+    assert main([*common, "--strategy", spec, "--max-steps", "5", "--save-state", str(state)]) == 3
+    with pytest.raises(InputError, match="which is code"):
+        resume(state)
+    with pytest.raises(InputError, match="cannot change it"):
+        resume(state, "optimal")
+    config, swarm = resume(state, spec)
+    assert config.strategy == spec and type(swarm.plugin).__name__ == "Mine"
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--seed", "3"], "--seed cannot change it"),
+        (["--agents", "9"], "--agents cannot change it"),
+        ([str(SHAPES / "star.png")], "would not be used"),
+    ],
+)
+def test_options_a_resume_would_ignore_are_refused(tmp_path, capsys, extra, message):
+    state = tmp_path / "s.state"
+    assert main([str(SHAPES / "line.png"), "--headless", "--max-steps", "3", "--save-state",
+                 str(state)]) == 3  # fmt: skip
+    assert main(["--load-state", str(state), "--headless", *extra]) == 2
+    assert message in capsys.readouterr().err
