@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import tempfile
+
 import numpy as np
 import pygame
 import pytest
@@ -211,4 +213,120 @@ def test_a_running_swarm_re_forms_live(tmp_path):
     for _ in range(300):
         view.tick()
     assert view.swarm.complete and view.swarm.overlap_total == 0
+    pygame.quit()
+
+
+# --- nothing a user does loses their work -----------------------------------------------
+
+
+def editor_on(path) -> Viewer:
+    return Viewer(
+        paper,
+        blank_world((30, 20), Pose(3, 3), path.name, (200, 60, 60)),
+        title=path.name,
+        start=False,
+        shape_file=path,
+        size=(640, 480),
+        fps=0,
+    )
+
+
+def type_text(view: Viewer, text: str) -> None:
+    for letter in text:
+        key(view, ord(letter), text=letter)
+
+
+def clear_name(view: Viewer) -> None:
+    for _ in range(len(view.editor.naming)):
+        key(view, pygame.K_BACKSPACE)
+
+
+@pytest.mark.parametrize("name", ["photo.jpg", "logo.png"])
+def test_saving_never_replaces_an_image_that_is_not_a_drawing(tmp_path, name):
+    original = tmp_path / name
+    pixels = np.random.default_rng(1).integers(0, 255, (28, 32, 3), dtype=np.uint8)
+    Image.fromarray(pixels).save(original)
+    before = original.read_bytes()
+    view = editor_on(original)
+    assert "shape.png" in view.editor.message, "it says where Ctrl+S will save"
+    drag(view, (8, 8), (12, 8))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)
+    assert original.read_bytes() == before
+    stem = original.stem
+    assert view.editor.naming == f"{stem}.shape.png", "a fresh name is offered"
+    key(view, pygame.K_RETURN)
+    assert original.read_bytes() == before
+    assert load_grid(tmp_path / f"{stem}.shape.png").sum() == 5
+    drag(view, (8, 10), (8, 10))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)  # now the drawing's own file: saved at once
+    assert view.editor.naming is None and load_grid(tmp_path / f"{stem}.shape.png").sum() == 6
+    assert original.read_bytes() == before
+    pygame.quit()
+
+
+def test_the_offered_name_is_never_one_that_exists(tmp_path):
+    original = tmp_path / "photo.jpg"
+    Image.new("RGB", (8, 8), (0, 0, 0)).save(original)
+    (tmp_path / "photo.shape.png").write_bytes(b"someone else's")
+    view = editor_on(original)
+    drag(view, (8, 8), (12, 8))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)
+    assert view.editor.naming == "photo.shape-2.png"
+    pygame.quit()
+
+
+def test_saving_as_an_existing_name_asks_first(blank, tmp_path):
+    other = tmp_path / "other.png"
+    Image.new("RGB", (8, 8), (10, 200, 30)).save(other)
+    before = other.read_bytes()
+    drag(blank, (8, 8), (12, 8))
+    for answer in (pygame.K_n, pygame.K_ESCAPE):
+        key(blank, pygame.K_s, pygame.KMOD_CTRL | pygame.KMOD_SHIFT)
+        clear_name(blank)
+        type_text(blank, "other")
+        key(blank, pygame.K_RETURN)
+        question = blank._second_line()
+        assert "replace" in question and "not a swarmshape drawing" in question
+        assert other.read_bytes() == before
+        key(blank, answer)
+        assert other.read_bytes() == before and "not saved" in blank.editor.message
+    key(blank, pygame.K_s, pygame.KMOD_CTRL | pygame.KMOD_SHIFT)
+    clear_name(blank)
+    type_text(blank, "other.png")
+    key(blank, pygame.K_RETURN)
+    key(blank, pygame.K_y, text="y")
+    assert load_grid(other).sum() == 5 and blank.editor.path == other
+
+
+def test_ctrl_s_asks_before_replacing_a_file_that_appeared_meanwhile(blank, tmp_path):
+    drag(blank, (8, 8), (12, 8))
+    (tmp_path / "drawn.png").write_bytes(b"written by something else")
+    key(blank, pygame.K_s, pygame.KMOD_CTRL)
+    assert (tmp_path / "drawn.png").read_bytes() == b"written by something else"
+    assert "replace" in blank._second_line()
+    key(blank, pygame.K_RETURN)
+    assert load_grid(tmp_path / "drawn.png").sum() == 5
+
+
+def test_autosave_never_overwrites_a_file(blank, tmp_path, capsys):
+    (tmp_path / "drawn.autosave.png").write_bytes(b"not ours")
+    drag(blank, (8, 8), (8, 12))
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    blank.tick()
+    assert (tmp_path / "drawn.autosave.png").read_bytes() == b"not ours"
+    kept = tmp_path / "drawn.autosave-2.png"
+    assert load_grid(kept).sum() == 5
+    assert str(kept) in capsys.readouterr().err
+
+
+def test_autosave_falls_back_to_the_temporary_folder(tmp_path, monkeypatch, capsys):
+    spare = tmp_path / "tmp"
+    spare.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(spare))
+    view = editor_on(tmp_path / "gone" / "drawn.png")  # a folder that is not there
+    drag(view, (8, 8), (8, 12))
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    view.tick()
+    assert load_grid(spare / "drawn.autosave.png").sum() == 5
+    assert "kept in" in capsys.readouterr().err
     pygame.quit()

@@ -3,20 +3,26 @@
 The canvas is the arena itself, cell for cell ``[x, y]``, so a user paints right where the swarm
 will form the shape; the seed frame is drawn over it and can be dragged or turned, taking the
 drawing along. `Editor.shape` turns the painting into a shape in the seed frame.
+
+Saving never replaces a user's file unasked: only the editor's own PNGs (their text chunk says
+so, see `is_drawing`) are saved over without a question; anything else, and any existing file
+under a typed name, needs a yes in the window, and autosaves always get a fresh name.
 """
 
 from __future__ import annotations
 
+import tempfile
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pygame
+from PIL import Image
 from scipy import ndimage
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
-from swarmshape.io.bitmap import save_grid
+from swarmshape.io.bitmap import EDITOR_TAG, save_grid
 
 HISTORY = 200
 """Undo steps kept."""
@@ -118,8 +124,30 @@ class Canvas:
         return True
 
 
+def is_drawing(path: Path) -> bool:
+    """Whether `path` is a PNG the editor wrote: the only files saved over without asking."""
+    try:
+        with Image.open(path) as image:
+            return image.format == "PNG" and image.info.get(EDITOR_TAG) == "1"
+    except (OSError, ValueError, Image.DecompressionBombError):
+        return False
+
+
+def fresh_path(path: Path) -> Path:
+    """`path` if nothing is there, else the first free NAME-2.png, NAME-3.png, ..."""
+    candidate, number = path, 1
+    while candidate.exists():
+        number += 1
+        candidate = path.with_name(f"{path.stem}-{number}{path.suffix}")
+    return candidate
+
+
 class Editor:
-    """Mouse and keys on a `Canvas`, the seed pose, and saving; drawn over the arena."""
+    """Mouse and keys on a `Canvas`, the seed pose, and saving; drawn over the arena.
+
+    `path` is the file being edited; Ctrl+S writes straight to it only when it is absent or
+    already a drawing, and otherwise offers a fresh ``NAME.shape.png`` beside it.
+    """
 
     def __init__(
         self,
@@ -133,7 +161,10 @@ class Editor:
     ) -> None:
         self.canvas = canvas
         self.pose = pose
-        self.path = path
+        self.source = path
+        """The file opened, which names the suggestions; it may be a photo never to replace."""
+        self.path = path if path is None or not path.exists() or is_drawing(path) else None
+        """Where Ctrl+S saves without asking for a name."""
         self.agents = agents
         self.resizable = resizable
         self.fixed = fixed
@@ -142,8 +173,16 @@ class Editor:
         self.cursor: tuple[int, int] | None = None
         self.dirty = False
         self.naming: str | None = None
+        """The text typed into "save as", while it is open."""
+        self.confirming: Path | None = None
+        """An existing file waiting for a yes before it is replaced."""
         self.show_help = False
         self.message = ""
+        if path is not None and self.path is None:
+            self.message = (
+                f"{path.name} is not a swarmshape drawing: Ctrl+S saves a copy as "
+                f"{self._suggestion().name}"
+            )
         self._ink: bool | None = None
         self._last: tuple[int, int] | None = None
         self._dragging_from: tuple[int, int] | None = None
@@ -166,7 +205,8 @@ class Editor:
         agents = "" if self.agents is None else f"   agents {self.agents}"
         if self.agents is not None and count > self.agents:
             agents += f" (short by {count - self.agents})"
-        name = self.path.name if self.path else "untitled"
+        shown = self.path or self.source
+        name = shown.name if shown else "untitled"
         return (
             f"EDIT {name}{'*' if self.dirty else ''}   grid {width}x{height}   "
             f"brush {self.brush}   cells {count}{agents}"
@@ -174,8 +214,24 @@ class Editor:
 
     # --- events -------------------------------------------------------------------------
 
+    def prompt(self) -> str | None:
+        """The question the window shows while a save waits for the user, if one does."""
+        if self.confirming is not None:
+            what = "" if is_drawing(self.confirming) else " and is not a swarmshape drawing"
+            return (
+                f"{self.confirming.name} exists{what}: replace it?   "
+                "y or Enter replaces, n or Esc keeps it"
+            )
+        if self.naming is not None:
+            folder = self._folder()
+            where = "" if folder == Path() else f"   in {folder}"
+            return f"save as: {self.naming}_{where}   (Enter saves, Esc cancels)"
+        return None
+
     def handle(self, event: pygame.event.Event, cell_at: Callable) -> str | None:
         """Apply one event; return "apply" when the user hands the shape over."""
+        if self.confirming is not None:
+            return self._confirm(event)
         if self.naming is not None:
             return self._type_name(event)
         if event.type == pygame.MOUSEMOTION:
@@ -224,9 +280,9 @@ class Editor:
             self.dirty |= self.canvas.redo()
         elif ctrl and key == pygame.K_s:
             if shift or self.path is None:
-                self.naming = self.path.name if self.path else "shape.png"
+                self.naming = (self.path or self._suggestion()).name
             else:
-                self.save(self.path)
+                self._save_asking(self.path, typed=False)
         elif key == pygame.K_LEFTBRACKET:
             self.brush = max(1, self.brush - 1)
         elif key == pygame.K_RIGHTBRACKET:
@@ -283,7 +339,7 @@ class Editor:
         self.canvas.grid &= ~self.canvas.blocked
 
     def _type_name(self, event: pygame.event.Event) -> None:
-        """The in-window text field of "save as"."""
+        """The in-window text field of "save as"; names are taken in the drawing's folder."""
         if event.type != pygame.KEYDOWN:
             return
         if event.key == pygame.K_ESCAPE:
@@ -291,14 +347,45 @@ class Editor:
         elif event.key in (pygame.K_RETURN, pygame.K_KP_ENTER):
             name, self.naming = self.naming.strip(), None
             if name:
-                path = Path(name if name.lower().endswith(".png") else f"{name}.png")
-                self.save(path)
+                path = self._folder() / (name if name.lower().endswith(".png") else f"{name}.png")
+                self._save_asking(path, typed=True)
         elif event.key == pygame.K_BACKSPACE:
             self.naming = self.naming[:-1]
         elif event.unicode and event.unicode.isprintable():
             self.naming += event.unicode
 
+    def _confirm(self, event: pygame.event.Event) -> None:
+        """y or Enter replaces the file waiting for an answer; n or Esc keeps it."""
+        if event.type != pygame.KEYDOWN:
+            return
+        path = self.confirming
+        if event.key in (pygame.K_y, pygame.K_RETURN, pygame.K_KP_ENTER):
+            self.confirming = None
+            self.save(path)
+        elif event.key in (pygame.K_n, pygame.K_ESCAPE):
+            self.confirming = None
+            self.message = f"not saved: {path.name} kept as it was"
+
     # --- files --------------------------------------------------------------------------
+
+    def _folder(self) -> Path:
+        shown = self.path or self.source
+        return shown.parent if shown else Path()
+
+    def _suggestion(self) -> Path:
+        """A name that replaces nothing: NAME.shape.png beside the file opened, or shape.png."""
+        stem = f"{self.source.stem}.shape" if self.source else "shape"
+        return fresh_path(self._folder() / f"{stem}.png")
+
+    def _save_asking(self, path: Path, *, typed: bool) -> None:
+        """Save to `path`, first asking in the window when that would replace a file that is
+        not a drawing, or any existing file the user typed the name of."""
+        if path.is_dir():
+            self.message = f"not saved: {path} is a folder; type a file name"
+        elif path.exists() and (not is_drawing(path) or (typed and path != self.path)):
+            self.confirming = path
+        else:
+            self.save(path)
 
     def save(self, path: Path) -> bool:
         """Save the shape to `path`, which becomes the file being edited."""
@@ -308,12 +395,17 @@ class Editor:
         return True
 
     def autosave(self) -> Path | None:
-        """Keep unsaved work beside the file (or here) as NAME.autosave.png; return where."""
+        """Keep unsaved work as NAME.autosave.png beside the file (or in the temporary folder
+        if that fails) under a name nothing has yet; return where, or None."""
         if not self.dirty or self.shape() is None:
             return None
-        stem = self.path.stem if self.path else "untitled"
-        target = (self.path.parent if self.path else Path()) / f"{stem}.autosave.png"
-        return target if self._write(target) else None
+        shown = self.path or self.source
+        name = f"{shown.stem if shown else 'untitled'}.autosave.png"
+        for folder in (self._folder(), Path(tempfile.gettempdir())):
+            target = fresh_path(folder / name)
+            if self._write(target):
+                return target
+        return None
 
     def _write(self, path: Path) -> bool:
         """Write the shape (as seen from the seeds) atomically; say how it went."""

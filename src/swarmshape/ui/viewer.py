@@ -151,6 +151,8 @@ class Viewer:
             kept = self.editor.autosave()
             if kept is not None:
                 print(f"swarmshape: unsaved shape kept in {kept}", file=sys.stderr)
+            elif self.editor.dirty and self.editor.shape() is not None:
+                print(f"swarmshape: unsaved shape lost, {self.editor.message}", file=sys.stderr)
 
     # --- the editor ---------------------------------------------------------------------
 
@@ -239,9 +241,8 @@ class Viewer:
     def _second_line(self) -> str:
         if not self.editing:
             return self.notice or HELP
-        if self.editor.naming is not None:
-            return f"save as: {self.editor.naming}_   (Enter saves, Esc cancels)"
-        return self.editor.message or "h help   Enter: hand the shape to the swarm"
+        editor = self.editor
+        return editor.prompt() or editor.message or "h help   Enter: hand the shape to the swarm"
 
     def status(self) -> str:
         if self.editing:
