@@ -14,7 +14,8 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import blank_world
 from swarmshape.io.bitmap import load_grid
 from swarmshape.strategies import create
-from swarmshape.ui.editor import HISTORY, Canvas
+from swarmshape.ui.editor import HELP_LINES, HISTORY, PAINT, Canvas
+from swarmshape.ui.render import FLOOR, SEED_GREEN
 from swarmshape.ui.viewer import Viewer
 from tests.conftest import grid_from, world_of
 
@@ -330,3 +331,82 @@ def test_autosave_falls_back_to_the_temporary_folder(tmp_path, monkeypatch, caps
     assert load_grid(spare / "drawn.autosave.png").sum() == 5
     assert "kept in" in capsys.readouterr().err
     pygame.quit()
+
+
+# --- no surprises -----------------------------------------------------------------------
+
+
+def colour_at(view: Viewer, cell: tuple[int, int]) -> tuple[int, int, int]:
+    return tuple(view.screen.get_at(pixel(view, cell))[:3])
+
+
+@pytest.mark.parametrize("code", [pygame.K_q, pygame.K_ESCAPE])
+def test_q_and_esc_quit_the_editor_keeping_unsaved_work(blank, tmp_path, code, capsys):
+    drag(blank, (8, 8), (8, 12))
+    key(blank, code, text="q" if code == pygame.K_q else "")
+    assert not blank.running
+    assert load_grid(tmp_path / "drawn.autosave.png").sum() == 5
+    assert "kept in" in capsys.readouterr().err
+
+
+def test_while_typing_a_name_q_is_a_letter_and_esc_cancels_the_name(blank):
+    drag(blank, (8, 8), (8, 12))
+    key(blank, pygame.K_s, pygame.KMOD_CTRL | pygame.KMOD_SHIFT)
+    clear_name(blank)
+    key(blank, pygame.K_q, text="q")
+    assert blank.running and blank.editor.naming == "q"
+    key(blank, pygame.K_ESCAPE)
+    assert blank.running and blank.editor.naming is None
+
+
+def test_the_arena_follows_the_grid_size_at_once(blank):
+    key(blank, pygame.K_PAGEUP)
+    width, height = blank.editor.canvas.size
+    assert width > 30 and f"grid {width}x{height}" in blank.status()
+    corner = (width - 1, height - 1)  # a cell the old arena did not have
+    drag(blank, corner, corner)
+    assert blank.editor.canvas.grid[corner]
+    assert colour_at(blank, corner) == PAINT
+
+
+def test_shrinking_never_cuts_off_painted_cells_or_seeds(blank):
+    drag(blank, (27, 10), (27, 10))
+    key(blank, pygame.K_PAGEDOWN)
+    assert blank.editor.canvas.size == (30, 20) and blank.editor.canvas.grid[27, 10]
+    assert "cut off" in blank.editor.message
+    drag(blank, (27, 10), (27, 10), button=3)
+    seed = tuple(blank.editor.seeds[0])
+    drag(blank, seed, (24, 16))  # seeds into the bottom-right corner
+    key(blank, pygame.K_PAGEDOWN)
+    assert blank.editor.canvas.size == (30, 20) and "seeds" in blank.editor.message
+    drag(blank, (24, 16), (2, 2))
+    key(blank, pygame.K_PAGEDOWN)
+    assert blank.editor.canvas.size == (26, 17)
+
+
+def test_the_arena_under_the_editor_shows_its_seeds_and_no_stale_shape(tmp_path):
+    world = world_of(np.ones((3, 4), dtype=bool))
+    view = Viewer(paper, world, title="box", start=False, size=(640, 480), fps=0)
+    target = tuple(world.targets[0])
+    drag(view, target, target, button=3)  # erased: no grey target left behind
+    assert colour_at(view, target) == FLOOR
+    seed = tuple(view.editor.seeds[0])
+    moved = (seed[0] + 5, seed[1] + 3)
+    drag(view, seed, moved)
+    assert colour_at(view, seed) != SEED_GREEN, "no stale seed"
+    assert colour_at(view, moved) == SEED_GREEN
+    old = {tuple(c) for c in world.targets.tolist()}
+    for cell in old - {tuple(c) for c in view.editor.canvas.cells.tolist()}:
+        assert colour_at(view, cell) == FLOOR, "no ghost of the shape"
+    pygame.quit()
+
+
+def test_the_help_panel_covers_neither_the_seeds_nor_the_drawing(blank):
+    drag(blank, (26, 15), (28, 18))
+    key(blank, pygame.K_h)
+    assert blank.editor.show_help
+    for cell in blank.editor.seeds.tolist():
+        assert colour_at(blank, tuple(cell)) == SEED_GREEN
+    for cell in blank.editor.canvas.cells.tolist():
+        assert colour_at(blank, tuple(cell)) == PAINT
+    assert any("quit" in line for line in HELP_LINES)

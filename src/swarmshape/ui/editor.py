@@ -11,6 +11,7 @@ under a typed name, needs a yes in the window, and autosaves always get a fresh 
 
 from __future__ import annotations
 
+import dataclasses
 import tempfile
 from collections import deque
 from collections.abc import Callable
@@ -22,6 +23,7 @@ from PIL import Image
 from scipy import ndimage
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.core.world import World
 from swarmshape.io.bitmap import EDITOR_TAG, save_grid
 
 HISTORY = 200
@@ -31,10 +33,13 @@ MAX_BRUSH = 9
 PAINT = (240, 170, 40)
 CURSOR = (20, 20, 20)
 HELP_LINES = (
-    "left paint   right erase   drag: strokes   [ ] brush   f fill   c clear",
-    "Ctrl+Z undo   Ctrl+Y redo   Ctrl+S save   Ctrl+Shift+S save as   t turn seeds",
-    "drag a green seed to move the frame   PgUp/PgDn grid size (before a run)",
-    "Enter or e: hand the shape to the swarm   h this help",
+    "left paint   right erase   [ ] brush   f fill   c clear",
+    "Ctrl+Z undo   Ctrl+Y redo   t turn the seeds",
+    "drag a green seed: the frame and drawing move",
+    "PgUp/PgDn grid size (before a run)",
+    "Ctrl+S save   Ctrl+Shift+S save as",
+    "Enter or e: hand the shape to the swarm",
+    "h hide this help   q or Esc quit",
 )
 
 
@@ -194,6 +199,22 @@ class Editor:
     def seeds(self) -> np.ndarray:
         return self.pose.to_world(SEED_CELLS)
 
+    def backdrop(self, world: World, group: int) -> World:
+        """`world` as the editor shows it: the canvas's size, this group's seeds where they are
+        now and none of its old targets (the painting is drawn over it), and the other groups
+        only while they are kept out of (a resized grid drops them)."""
+        empty = np.zeros((0, 2), dtype=np.int64)
+        groups = []
+        for index, placed in enumerate(world.groups):
+            if index == group:
+                placed = dataclasses.replace(
+                    placed, pose=self.pose, targets=empty, seeds=self.seeds
+                )
+            elif not len(self.fixed):
+                placed = dataclasses.replace(placed, targets=empty, seeds=empty)
+            groups.append(placed)
+        return World(self.canvas.size, tuple(groups), world.name)
+
     def shape(self) -> Shape | None:
         """The painting as a shape in the seed frame (None while nothing is painted)."""
         cells = self.canvas.cells
@@ -229,7 +250,8 @@ class Editor:
         return None
 
     def handle(self, event: pygame.event.Event, cell_at: Callable) -> str | None:
-        """Apply one event; return "apply" when the user hands the shape over."""
+        """Apply one event; return "apply" when the user hands the shape over and "quit" when
+        they leave (q and Esc, except while a name is typed or a question waits)."""
         if self.confirming is not None:
             return self._confirm(event)
         if self.naming is not None:
@@ -274,6 +296,8 @@ class Editor:
         key, ctrl, shift = event.key, event.mod & pygame.KMOD_CTRL, event.mod & pygame.KMOD_SHIFT
         if key in (pygame.K_RETURN, pygame.K_KP_ENTER, pygame.K_e):
             return "apply"
+        if key in (pygame.K_q, pygame.K_ESCAPE):
+            return "quit"
         if ctrl and key == pygame.K_z:
             self.dirty |= self.canvas.undo()
         elif ctrl and key == pygame.K_y:
@@ -322,11 +346,26 @@ class Editor:
         self._block_seeds()
 
     def _resize(self, by: int) -> None:
+        """Grow or shrink the grid, anchored top-left; never cut painted cells or seeds off."""
         if not self.resizable:
             self.message = "the grid size is fixed while a swarm runs on it"
             return
         width, height = self.canvas.size
         size = (max(8, width + by), max(6, height + round(by * height / width)))
+        if size == self.canvas.size:
+            self.message = f"the grid is as small as it gets, {width}x{height}"
+            return
+        cut = (self.canvas.cells >= np.array(size)).any(axis=1).sum()
+        if (self.seeds >= np.array(size)).any():
+            self.message = f"no room for the seeds in {size[0]}x{size[1]}; drag them in first"
+            return
+        if cut:
+            self.message = (
+                f"shrinking to {size[0]}x{size[1]} would cut off {cut} painted cells; "
+                "erase or move them first"
+            )
+            return
+        self.message = ""
         self._edit(lambda: self.canvas.resize(size))
         self.fixed = np.zeros((0, 2), dtype=np.int64)
         self._block_seeds()

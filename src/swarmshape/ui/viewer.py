@@ -115,8 +115,13 @@ class Viewer:
         elif event.type == pygame.KEYDOWN and event.key == pygame.K_F12:
             self.notice = f"saved {self.screenshot()}"
         elif self.editing:
-            if self.editor.handle(event, self.cell_at) == "apply":
+            outcome = self.editor.handle(event, self.cell_at)
+            if outcome == "apply":
                 self.finish_editing()
+            elif outcome == "quit":
+                self.quit()
+            else:
+                self._follow_editor()
         elif event.type == pygame.KEYDOWN:
             self._key(event)
 
@@ -162,6 +167,7 @@ class Viewer:
         others = [g for i, g in enumerate(self.world.groups) if i != group]
         fixed = np.concatenate([np.zeros((0, 2), np.int64)] + [g.targets for g in others])
         fixed = np.concatenate([fixed] + [g.seeds for g in others])
+        self._group = group
         if self.editor is None:
             self.editor = Editor(
                 Canvas(self.world.size, placed.targets),
@@ -172,6 +178,15 @@ class Viewer:
                 fixed=fixed,
             )
         self.editing = True
+        self._follow_editor()
+
+    def _follow_editor(self) -> None:
+        """Draw the arena as the editor has it now: its size, its seeds, no stale shape."""
+        world = self.editor.backdrop(self.world, self._group)
+        drawn = self.renderer.world
+        same = drawn.size == world.size and np.array_equal(drawn.seeds, world.seeds)
+        if not (same and np.array_equal(drawn.targets, world.targets)):
+            self.renderer = Renderer(world)
 
     def finish_editing(self, group: int = 0) -> None:
         """Hand the painted shape over: re-form the running swarm, or start one."""
@@ -202,7 +217,7 @@ class Viewer:
         """The world cell under a pixel, or None outside the arena."""
         cell, (ox, oy) = self.renderer.fit(self._world_area())
         x, y = (pixel[0] - ox) // cell, (pixel[1] - oy) // cell
-        width, height = self.world.size
+        width, height = self.renderer.world.size
         return (x, y) if 0 <= x < width and 0 <= y < height else None
 
     # --- drawing ------------------------------------------------------------------------
@@ -226,7 +241,7 @@ class Viewer:
         if self.editing:
             self.editor.draw(self.screen, lambda cell: self.renderer.cell_rect(cell, area))
             if self.editor.show_help:
-                panel = pygame.Rect(area.x + 8, area.y + 8, 640, 22 * len(HELP_LINES) + 10)
+                panel = self._help_panel(area)
                 self.screen.fill(HUD_BACK, panel)
                 for row, line in enumerate(HELP_LINES):
                     self._text(line, (panel.x + 10, panel.y + 6 + 22 * row), HUD_TEXT)
@@ -234,6 +249,27 @@ class Viewer:
         self.screen.fill(HUD_BACK, (0, 0, width, HUD_HEIGHT))
         self._text(self.status(), (10, 6), HUD_TEXT)
         self._text(self._second_line(), (10, 27), HUD_DIM)
+
+    def _help_panel(self, area: pygame.Rect) -> pygame.Rect:
+        """The corner of `area` where the help covers the fewest seeds, then painted cells."""
+        width = max(self.font.size(line)[0] for line in HELP_LINES) + 20
+        panel = pygame.Rect(0, 0, width, 22 * len(HELP_LINES) + 10)
+        inner = area.inflate(-16, -16)
+        corners = [
+            panel.move_to(bottomright=inner.bottomright),
+            panel.move_to(topright=inner.topright),
+            panel.move_to(bottomleft=inner.bottomleft),
+            panel.move_to(topleft=inner.topleft),
+        ]
+        size, origin = self.renderer.fit(area)
+        seeds = self.editor.seeds * size + np.array(origin)
+        painted = self.editor.canvas.cells * size + np.array(origin)
+
+        def covered(corner: pygame.Rect, cells: np.ndarray) -> int:
+            low, high = np.array(corner.topleft), np.array(corner.bottomright)
+            return int(((cells < high) & (cells + size > low)).all(axis=1).sum())
+
+        return min(corners, key=lambda c: (covered(c, seeds), covered(c, painted)))
 
     def _text(self, text: str, where: tuple[int, int], colour: tuple[int, int, int]) -> None:
         self.screen.blit(self.font.render(text, True, colour), where)
