@@ -2,8 +2,11 @@
 
 Each call of `Viewer.tick` handles pending events, advances the simulation by the current
 speed, and draws one frame, so tests can post events and drive it frame by frame under
-``SDL_VIDEODRIVER=dummy``. `e` switches into the editor while the swarm keeps running; Enter
-(or `e` again) hands the painted shape to the swarm, or starts one if none runs yet.
+``SDL_VIDEODRIVER=dummy``. While nothing can change without the user (paused, formed with
+every robot at rest, no swarm yet) a tick waits for an event instead, and draws only if one
+came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
+running; Enter (or `e` again) hands the painted shape to the swarm, or starts one if none runs
+yet.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pygame
 
-from swarmshape.core.states import SETTLED
+from swarmshape.core.states import MOVING, SETTLED, WANDERING
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
@@ -29,6 +32,9 @@ SPEEDS = (0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256)
 
 SPARE_WHEN_PAINTED = 0.25
 """A swarm started from a painting gets this share of spare robots, to recruit on re-edits."""
+
+IDLE_WAIT_MS = 250
+"""How long an idle tick waits for an event; any event ends the wait at once."""
 
 HUD_HEIGHT = 48
 HUD_BACK = (38, 40, 46)
@@ -78,6 +84,7 @@ class Viewer:
         self.running = True
         self.notice = ""
         self._budget = 0.0
+        self._redraw = True
         self.editor: Editor | None = None
         self.editing = False
         self._shape_file = shape_file
@@ -93,17 +100,36 @@ class Viewer:
             pass
         pygame.quit()
 
+    @property
+    def idle(self) -> bool:
+        """Nothing changes unless the user acts: no swarm, paused, or formed with every robot
+        at rest and none wandering."""
+        swarm = self.swarm
+        if swarm is None or self.paused:
+            return True
+        busy = np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any()
+        return swarm.complete and not busy
+
     def tick(self) -> bool:
-        """One frame: events, simulation, drawing. Returns False once the user quit."""
-        for event in pygame.event.get():
+        """One frame: events, simulation, drawing. Returns False once the user quit.
+
+        When idle it waits up to `IDLE_WAIT_MS` for an event and redraws only after one."""
+        events = pygame.event.get()
+        if not events and self.idle:
+            first = pygame.event.wait(IDLE_WAIT_MS)
+            events = [first, *pygame.event.get()] if first.type != pygame.NOEVENT else []
+        for event in events:
             self.handle(event)
-        if not self.paused and self.swarm is not None:
+        if not self.idle:
             self._budget += self.speed
-            while self._budget >= 1:
+            while self._budget >= 1 and not self.idle:
                 self.step()
                 self._budget -= 1
-        self.draw()
-        pygame.display.flip()
+            self._redraw = True
+        if events or self._redraw:
+            self.draw()
+            pygame.display.flip()
+            self._redraw = False
         self.clock.tick(self.fps)
         return self.running
 
@@ -294,5 +320,6 @@ class Viewer:
         return (
             f"step {swarm.step_count}   settled {settled}/{len(swarm.filled)}   "
             f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "
-            f"{self.clock.get_fps():.0f} FPS   seed {swarm.seed}{formed}{paused}"
+            f"{'idle' if self.idle else f'{self.clock.get_fps():.0f} FPS'}   "
+            f"seed {swarm.seed}{formed}{paused}"
         )
