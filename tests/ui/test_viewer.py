@@ -134,3 +134,25 @@ def test_a_paused_window_waits_for_events(viewer, monkeypatch):
     assert wall > 0.3 and cpu < 0.5 * wall
     press(viewer, pygame.K_SPACE)
     assert drawn[0] == 1 and viewer.swarm.step_count > 1
+
+
+def test_the_window_stops_at_max_steps_and_keeps_the_final_swarm(tmp_path):
+    view = Viewer(
+        lambda world: Swarm(world, create("paper"), 3),
+        world_of(SHAPE),
+        title="bar.png",
+        size=(640, 400),
+        fps=0,
+        max_steps=5,
+    )
+    assert "step 0/5" in view.status()
+    for _ in range(4):
+        view.tick()
+    assert view.swarm.step_count == 5 and not view.swarm.complete
+    assert "step 5/5" in view.status() and "max steps" in view.status()
+    press(view, pygame.K_PERIOD)
+    assert view.swarm.step_count == 5 and "max-steps" in view.notice
+    final = view.swarm
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    view.run()
+    assert view.swarm is final and view.swarm.step_count == 5

@@ -47,7 +47,8 @@ class Viewer:
     """A resizable window on one world; `make_swarm` builds (and on `r` rebuilds) its run.
 
     With ``start=False`` the window opens in the editor and no swarm runs until the user
-    hands over a shape.
+    hands over a shape. Like a headless run, it stops stepping once `max_steps` steps have run
+    in total (None: no limit); `swarm` is the run as it ended when the window closes.
     """
 
     def __init__(
@@ -63,6 +64,7 @@ class Viewer:
         fps: int = 60,
         screenshots: Path = Path(),
         observers: Sequence = (),
+        max_steps: int | None = None,
     ) -> None:
         pygame.display.init()  # not pygame.init(): no sound, so no audio device needed
         pygame.font.init()
@@ -80,6 +82,7 @@ class Viewer:
         self.screenshots = screenshots
         self.observers = observers
         """Recorders and traces: each captures the swarm after every step."""
+        self.max_steps = max_steps
         self.paused = False
         self.running = True
         self.notice = ""
@@ -101,11 +104,18 @@ class Viewer:
         pygame.quit()
 
     @property
+    def out_of_steps(self) -> bool:
+        swarm = self.swarm
+        return (
+            self.max_steps is not None and swarm is not None and swarm.step_count >= self.max_steps
+        )
+
+    @property
     def idle(self) -> bool:
         """Nothing changes unless the user acts: no swarm, paused, or formed with every robot
-        at rest and none wandering."""
+        at rest and none wandering, or `max_steps` reached."""
         swarm = self.swarm
-        if swarm is None or self.paused:
+        if swarm is None or self.paused or self.out_of_steps:
             return True
         busy = np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any()
         return swarm.complete and not busy
@@ -159,7 +169,10 @@ class Viewer:
             self.paused = not self.paused
         elif key == pygame.K_PERIOD and self.swarm is not None:
             self.paused = True
-            self.step()
+            if self.out_of_steps:
+                self.notice = f"stopped at --max-steps {self.max_steps}"
+            else:
+                self.step()
         elif key in (pygame.K_PLUS, pygame.K_EQUALS, pygame.K_KP_PLUS):
             self.speed_index = min(self.speed_index + 1, len(SPEEDS) - 1)
         elif key in (pygame.K_MINUS, pygame.K_KP_MINUS):
@@ -317,8 +330,11 @@ class Viewer:
         missing = len(swarm.filled) - len(swarm.cell)
         if missing > 0:
             formed += f"   {missing} agents short"
+        limit = "" if self.max_steps is None else f"/{self.max_steps}"
+        if self.out_of_steps:
+            formed += "   max steps reached"
         return (
-            f"step {swarm.step_count}   settled {settled}/{len(swarm.filled)}   "
+            f"step {swarm.step_count}{limit}   settled {settled}/{len(swarm.filled)}   "
             f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "
             f"{'idle' if self.idle else f'{self.clock.get_fps():.0f} FPS'}   "
             f"seed {swarm.seed}{formed}{paused}"
