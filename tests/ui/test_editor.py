@@ -410,3 +410,14 @@ def test_the_help_panel_covers_neither_the_seeds_nor_the_drawing(blank):
     for cell in blank.editor.canvas.cells.tolist():
         assert colour_at(blank, tuple(cell)) == PAINT
     assert any("quit" in line for line in HELP_LINES)
+
+
+def test_a_new_file_not_named_png_is_offered_a_png_name(tmp_path):
+    view = editor_on(tmp_path / "new.jpg")
+    assert "PNG" in view.editor.message
+    drag(view, (8, 8), (12, 8))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)
+    assert view.editor.naming == "new.png"
+    key(view, pygame.K_RETURN)
+    assert load_grid(tmp_path / "new.png").sum() == 5 and not (tmp_path / "new.jpg").exists()
+    pygame.quit()

@@ -168,7 +168,8 @@ class Editor:
         self.pose = pose
         self.source = path
         """The file opened, which names the suggestions; it may be a photo never to replace."""
-        self.path = path if path is None or not path.exists() or is_drawing(path) else None
+        ours = path is None or (path.suffix.lower() == ".png" and not path.exists())
+        self.path = path if ours or is_drawing(path) else None
         """Where Ctrl+S saves without asking for a name."""
         self.agents = agents
         self.resizable = resizable
@@ -184,10 +185,8 @@ class Editor:
         self.show_help = False
         self.message = ""
         if path is not None and self.path is None:
-            self.message = (
-                f"{path.name} is not a swarmshape drawing: Ctrl+S saves a copy as "
-                f"{self._suggestion().name}"
-            )
+            why = "is not a swarmshape drawing" if path.exists() else "is not a PNG name"
+            self.message = f"{path.name} {why}: Ctrl+S saves as {self._suggestion().name}"
         self._ink: bool | None = None
         self._last: tuple[int, int] | None = None
         self._dragging_from: tuple[int, int] | None = None
@@ -412,8 +411,12 @@ class Editor:
         return shown.parent if shown else Path()
 
     def _suggestion(self) -> Path:
-        """A name that replaces nothing: NAME.shape.png beside the file opened, or shape.png."""
-        stem = f"{self.source.stem}.shape" if self.source else "shape"
+        """A PNG name that replaces nothing: NAME.shape.png beside the file opened (NAME.png
+        for a new file named otherwise), or shape.png."""
+        source = self.source
+        stem = "shape" if source is None else source.stem
+        if source is not None and source.exists():
+            stem += ".shape"
         return fresh_path(self._folder() / f"{stem}.png")
 
     def _save_asking(self, path: Path, *, typed: bool) -> None:

@@ -90,6 +90,10 @@ class Viewer:
         self._redraw = True
         self.editor: Editor | None = None
         self.editing = False
+        self._group = 0
+        """The group being edited."""
+        self._backdrop: tuple | None = None
+        """What the editor's arena was drawn for, and its renderer."""
         self._shape_file = shape_file
         if not start:
             self.start_editing()
@@ -117,8 +121,9 @@ class Viewer:
         swarm = self.swarm
         if swarm is None or self.paused or self.out_of_steps:
             return True
-        busy = np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any()
-        return swarm.complete and not busy
+        if not swarm.complete:
+            return False
+        return not (np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any())
 
     def tick(self) -> bool:
         """One frame: events, simulation, drawing. Returns False once the user quit.
@@ -220,12 +225,13 @@ class Viewer:
         self._follow_editor()
 
     def _follow_editor(self) -> None:
-        """Draw the arena as the editor has it now: its size, its seeds, no stale shape."""
-        world = self.editor.backdrop(self.world, self._group)
-        drawn = self.renderer.world
-        same = drawn.size == world.size and np.array_equal(drawn.seeds, world.seeds)
-        if not (same and np.array_equal(drawn.targets, world.targets)):
-            self.renderer = Renderer(world)
+        """Draw the arena as the editor has it now: its size, its seeds, no stale shape
+        (rebuilt only when one of those changed, not on every mouse move)."""
+        editor = self.editor
+        key = (editor.canvas.size, editor.pose, len(editor.fixed))
+        if self._backdrop != (key, self.renderer):
+            self.renderer = Renderer(editor.backdrop(self.world, self._group))
+            self._backdrop = (key, self.renderer)
 
     def finish_editing(self, group: int = 0) -> None:
         """Hand the painted shape over: re-form the running swarm, or start one."""
