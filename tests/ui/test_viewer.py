@@ -156,3 +156,10 @@ def test_the_window_stops_at_max_steps_and_keeps_the_final_swarm(tmp_path):
     pygame.event.post(pygame.event.Event(pygame.QUIT))
     view.run()
     assert view.swarm is final and view.swarm.step_count == 5
+
+
+def test_no_step_runs_after_the_user_quit(viewer):
+    viewer.tick()
+    before = viewer.swarm.step_count
+    press(viewer, pygame.K_q)
+    assert not viewer.running and viewer.swarm.step_count == before

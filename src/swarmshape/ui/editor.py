@@ -182,6 +182,8 @@ class Editor:
         """The text typed into "save as", while it is open."""
         self.confirming: Path | None = None
         """An existing file waiting for a yes before it is replaced."""
+        self._question = ""
+        """What the window asks about `confirming`."""
         self.show_help = False
         self.message = ""
         if path is not None and self.path is None:
@@ -237,11 +239,7 @@ class Editor:
     def prompt(self) -> str | None:
         """The question the window shows while a save waits for the user, if one does."""
         if self.confirming is not None:
-            what = "" if is_drawing(self.confirming) else " and is not a swarmshape drawing"
-            return (
-                f"{self.confirming.name} exists{what}: replace it?   "
-                "y or Enter replaces, n or Esc keeps it"
-            )
+            return self._question
         if self.naming is not None:
             folder = self._folder()
             where = "" if folder == Path() else f"   in {folder}"
@@ -424,8 +422,14 @@ class Editor:
         not a drawing, or any existing file the user typed the name of."""
         if path.is_dir():
             self.message = f"not saved: {path} is a folder; type a file name"
-        elif path.exists() and (not is_drawing(path) or (typed and path != self.path)):
+            return
+        drawing = is_drawing(path)
+        if path.exists() and (not drawing or (typed and path != self.path)):
+            what = "" if drawing else " and is not a swarmshape drawing"
             self.confirming = path
+            self._question = (
+                f"{path.name} exists{what}: replace it?   y or Enter replaces, n or Esc keeps it"
+            )
         else:
             self.save(path)
 

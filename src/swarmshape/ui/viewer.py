@@ -109,6 +109,7 @@ class Viewer:
 
     @property
     def out_of_steps(self) -> bool:
+        """`max_steps` steps have run in total, as `runs.Runner` counts them."""
         swarm = self.swarm
         return (
             self.max_steps is not None and swarm is not None and swarm.step_count >= self.max_steps
@@ -135,7 +136,7 @@ class Viewer:
             events = [first, *pygame.event.get()] if first.type != pygame.NOEVENT else []
         for event in events:
             self.handle(event)
-        if not self.idle:
+        if self.running and not self.idle:  # once the user quit, the run is as they saw it
             self._budget += self.speed
             while self._budget >= 1 and not self.idle:
                 self.step()
