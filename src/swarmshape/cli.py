@@ -173,6 +173,11 @@ def _shared_options() -> argparse.ArgumentParser:
     record.add_argument(
         "--record-every", type=int, default=1, help="record every K-th step (default 1)"
     )
+    record.add_argument(
+        "--record-size",
+        type=_size,
+        help="recorded frame size in pixels, WxH (default 640x400)",
+    )
     record.add_argument("--trace", type=Path, help="write figures per step as CSV")
     record.add_argument(
         "--trace-every", type=int, default=1, help="trace every K-th step (default 1)"
@@ -264,6 +269,7 @@ def run_session(args: argparse.Namespace) -> int:
         record=args.record,
         frames=args.frames,
         record_every=args.record_every,
+        record_size=args.record_size,
         trace=args.trace,
         trace_every=args.trace_every,
         save_state=args.save_state,

@@ -40,6 +40,8 @@ class Outputs:
     record: Path | None = None
     frames: Path | None = None
     record_every: int = 1
+    record_size: tuple[int, int] | None = None
+    """Frame size in pixels; None is the recorder's own default."""
     trace: Path | None = None
     trace_every: int = 1
     save_state: Path | None = None
@@ -63,7 +65,8 @@ class Outputs:
         if self.record or self.frames:
             from swarmshape.ui.record import Recorder  # draws with pygame, offscreen
 
-            observers.append(Recorder(self.record, self.frames, self.record_every))
+            size = {} if self.record_size is None else {"size": self.record_size}
+            observers.append(Recorder(self.record, self.frames, self.record_every, **size))
         if self.trace:
             observers.append(Trace(self.trace, self.trace_every))
         if self.positions:
@@ -144,9 +147,10 @@ class Session:
             world,
             title=world.name,
             start=not self.editing,
-            shape_file=self.config.shape if self.editing else None,
+            shape_file=config.shape,
             speed=self.speed,
             observers=observers,
+            max_steps=config.max_steps,
         )
         viewer.run()
         if viewer.swarm is not None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import tempfile
+
 import numpy as np
 import pygame
 import pytest
@@ -12,7 +14,8 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import blank_world
 from swarmshape.io.bitmap import load_grid
 from swarmshape.strategies import create
-from swarmshape.ui.editor import HISTORY, Canvas
+from swarmshape.ui.editor import HELP_LINES, HISTORY, PAINT, Canvas
+from swarmshape.ui.render import FLOOR, SEED_GREEN
 from swarmshape.ui.viewer import Viewer
 from tests.conftest import grid_from, world_of
 
@@ -211,4 +214,210 @@ def test_a_running_swarm_re_forms_live(tmp_path):
     for _ in range(300):
         view.tick()
     assert view.swarm.complete and view.swarm.overlap_total == 0
+    pygame.quit()
+
+
+# --- nothing a user does loses their work -----------------------------------------------
+
+
+def editor_on(path) -> Viewer:
+    return Viewer(
+        paper,
+        blank_world((30, 20), Pose(3, 3), path.name, (200, 60, 60)),
+        title=path.name,
+        start=False,
+        shape_file=path,
+        size=(640, 480),
+        fps=0,
+    )
+
+
+def type_text(view: Viewer, text: str) -> None:
+    for letter in text:
+        key(view, ord(letter), text=letter)
+
+
+def clear_name(view: Viewer) -> None:
+    for _ in range(len(view.editor.naming)):
+        key(view, pygame.K_BACKSPACE)
+
+
+@pytest.mark.parametrize("name", ["photo.jpg", "logo.png"])
+def test_saving_never_replaces_an_image_that_is_not_a_drawing(tmp_path, name):
+    original = tmp_path / name
+    pixels = np.random.default_rng(1).integers(0, 255, (28, 32, 3), dtype=np.uint8)
+    Image.fromarray(pixels).save(original)
+    before = original.read_bytes()
+    view = editor_on(original)
+    assert "shape.png" in view.editor.message, "it says where Ctrl+S will save"
+    drag(view, (8, 8), (12, 8))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)
+    assert original.read_bytes() == before
+    stem = original.stem
+    assert view.editor.naming == f"{stem}.shape.png", "a fresh name is offered"
+    key(view, pygame.K_RETURN)
+    assert original.read_bytes() == before
+    assert load_grid(tmp_path / f"{stem}.shape.png").sum() == 5
+    drag(view, (8, 10), (8, 10))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)  # now the drawing's own file: saved at once
+    assert view.editor.naming is None and load_grid(tmp_path / f"{stem}.shape.png").sum() == 6
+    assert original.read_bytes() == before
+    pygame.quit()
+
+
+def test_the_offered_name_is_never_one_that_exists(tmp_path):
+    original = tmp_path / "photo.jpg"
+    Image.new("RGB", (8, 8), (0, 0, 0)).save(original)
+    (tmp_path / "photo.shape.png").write_bytes(b"someone else's")
+    view = editor_on(original)
+    drag(view, (8, 8), (12, 8))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)
+    assert view.editor.naming == "photo.shape-2.png"
+    pygame.quit()
+
+
+def test_saving_as_an_existing_name_asks_first(blank, tmp_path):
+    other = tmp_path / "other.png"
+    Image.new("RGB", (8, 8), (10, 200, 30)).save(other)
+    before = other.read_bytes()
+    drag(blank, (8, 8), (12, 8))
+    for answer in (pygame.K_n, pygame.K_ESCAPE):
+        key(blank, pygame.K_s, pygame.KMOD_CTRL | pygame.KMOD_SHIFT)
+        clear_name(blank)
+        type_text(blank, "other")
+        key(blank, pygame.K_RETURN)
+        question = blank._second_line()
+        assert "replace" in question and "not a swarmshape drawing" in question
+        assert other.read_bytes() == before
+        key(blank, answer)
+        assert other.read_bytes() == before and "not saved" in blank.editor.message
+    key(blank, pygame.K_s, pygame.KMOD_CTRL | pygame.KMOD_SHIFT)
+    clear_name(blank)
+    type_text(blank, "other.png")
+    key(blank, pygame.K_RETURN)
+    key(blank, pygame.K_y, text="y")
+    assert load_grid(other).sum() == 5 and blank.editor.path == other
+
+
+def test_ctrl_s_asks_before_replacing_a_file_that_appeared_meanwhile(blank, tmp_path):
+    drag(blank, (8, 8), (12, 8))
+    (tmp_path / "drawn.png").write_bytes(b"written by something else")
+    key(blank, pygame.K_s, pygame.KMOD_CTRL)
+    assert (tmp_path / "drawn.png").read_bytes() == b"written by something else"
+    assert "replace" in blank._second_line()
+    key(blank, pygame.K_RETURN)
+    assert load_grid(tmp_path / "drawn.png").sum() == 5
+
+
+def test_autosave_never_overwrites_a_file(blank, tmp_path, capsys):
+    (tmp_path / "drawn.autosave.png").write_bytes(b"not ours")
+    drag(blank, (8, 8), (8, 12))
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    blank.tick()
+    assert (tmp_path / "drawn.autosave.png").read_bytes() == b"not ours"
+    kept = tmp_path / "drawn.autosave-2.png"
+    assert load_grid(kept).sum() == 5
+    assert str(kept) in capsys.readouterr().err
+
+
+def test_autosave_falls_back_to_the_temporary_folder(tmp_path, monkeypatch, capsys):
+    spare = tmp_path / "tmp"
+    spare.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(spare))
+    view = editor_on(tmp_path / "gone" / "drawn.png")  # a folder that is not there
+    drag(view, (8, 8), (8, 12))
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    view.tick()
+    assert load_grid(spare / "drawn.autosave.png").sum() == 5
+    assert "kept in" in capsys.readouterr().err
+    pygame.quit()
+
+
+# --- no surprises -----------------------------------------------------------------------
+
+
+def colour_at(view: Viewer, cell: tuple[int, int]) -> tuple[int, int, int]:
+    return tuple(view.screen.get_at(pixel(view, cell))[:3])
+
+
+@pytest.mark.parametrize("code", [pygame.K_q, pygame.K_ESCAPE])
+def test_q_and_esc_quit_the_editor_keeping_unsaved_work(blank, tmp_path, code, capsys):
+    drag(blank, (8, 8), (8, 12))
+    key(blank, code, text="q" if code == pygame.K_q else "")
+    assert not blank.running
+    assert load_grid(tmp_path / "drawn.autosave.png").sum() == 5
+    assert "kept in" in capsys.readouterr().err
+
+
+def test_while_typing_a_name_q_is_a_letter_and_esc_cancels_the_name(blank):
+    drag(blank, (8, 8), (8, 12))
+    key(blank, pygame.K_s, pygame.KMOD_CTRL | pygame.KMOD_SHIFT)
+    clear_name(blank)
+    key(blank, pygame.K_q, text="q")
+    assert blank.running and blank.editor.naming == "q"
+    key(blank, pygame.K_ESCAPE)
+    assert blank.running and blank.editor.naming is None
+
+
+def test_the_arena_follows_the_grid_size_at_once(blank):
+    key(blank, pygame.K_PAGEUP)
+    width, height = blank.editor.canvas.size
+    assert width > 30 and f"grid {width}x{height}" in blank.status()
+    corner = (width - 1, height - 1)  # a cell the old arena did not have
+    drag(blank, corner, corner)
+    assert blank.editor.canvas.grid[corner]
+    assert colour_at(blank, corner) == PAINT
+
+
+def test_shrinking_never_cuts_off_painted_cells_or_seeds(blank):
+    drag(blank, (27, 10), (27, 10))
+    key(blank, pygame.K_PAGEDOWN)
+    assert blank.editor.canvas.size == (30, 20) and blank.editor.canvas.grid[27, 10]
+    assert "cut off" in blank.editor.message
+    drag(blank, (27, 10), (27, 10), button=3)
+    seed = tuple(blank.editor.seeds[0])
+    drag(blank, seed, (24, 16))  # seeds into the bottom-right corner
+    key(blank, pygame.K_PAGEDOWN)
+    assert blank.editor.canvas.size == (30, 20) and "seeds" in blank.editor.message
+    drag(blank, (24, 16), (2, 2))
+    key(blank, pygame.K_PAGEDOWN)
+    assert blank.editor.canvas.size == (26, 17)
+
+
+def test_the_arena_under_the_editor_shows_its_seeds_and_no_stale_shape(tmp_path):
+    world = world_of(np.ones((3, 4), dtype=bool))
+    view = Viewer(paper, world, title="box", start=False, size=(640, 480), fps=0)
+    target = tuple(world.targets[0])
+    drag(view, target, target, button=3)  # erased: no grey target left behind
+    assert colour_at(view, target) == FLOOR
+    seed = tuple(view.editor.seeds[0])
+    moved = (seed[0] + 5, seed[1] + 3)
+    drag(view, seed, moved)
+    assert colour_at(view, seed) != SEED_GREEN, "no stale seed"
+    assert colour_at(view, moved) == SEED_GREEN
+    old = {tuple(c) for c in world.targets.tolist()}
+    for cell in old - {tuple(c) for c in view.editor.canvas.cells.tolist()}:
+        assert colour_at(view, cell) == FLOOR, "no ghost of the shape"
+    pygame.quit()
+
+
+def test_the_help_panel_covers_neither_the_seeds_nor_the_drawing(blank):
+    drag(blank, (26, 15), (28, 18))
+    key(blank, pygame.K_h)
+    assert blank.editor.show_help
+    for cell in blank.editor.seeds.tolist():
+        assert colour_at(blank, tuple(cell)) == SEED_GREEN
+    for cell in blank.editor.canvas.cells.tolist():
+        assert colour_at(blank, tuple(cell)) == PAINT
+    assert any("quit" in line for line in HELP_LINES)
+
+
+def test_a_new_file_not_named_png_is_offered_a_png_name(tmp_path):
+    view = editor_on(tmp_path / "new.jpg")
+    assert "PNG" in view.editor.message
+    drag(view, (8, 8), (12, 8))
+    key(view, pygame.K_s, pygame.KMOD_CTRL)
+    assert view.editor.naming == "new.png"
+    key(view, pygame.K_RETURN)
+    assert load_grid(tmp_path / "new.png").sum() == 5 and not (tmp_path / "new.jpg").exists()
     pygame.quit()

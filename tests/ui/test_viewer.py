@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import time
+
 import pygame
 import pytest
 
@@ -81,3 +83,83 @@ def test_window_resizes_and_q_quits(viewer):
     assert viewer.screen.get_size() == (500, 300)
     press(viewer, pygame.K_q)
     assert not viewer.running
+
+
+# --- an idle window waits instead of burning CPU ----------------------------------------
+
+
+def count_draws(view: Viewer, monkeypatch) -> list[int]:
+    drawn = [0]
+    draw = view.draw
+
+    def counted() -> None:
+        drawn[0] += 1
+        draw()
+
+    monkeypatch.setattr(view, "draw", counted)
+    return drawn
+
+
+def idle_ticks(view: Viewer, ticks: int = 3) -> tuple[int, float, float]:
+    """Steps run, CPU seconds and wall seconds over a few ticks with no events."""
+    steps, cpu, wall = view.swarm.step_count, time.process_time(), time.perf_counter()
+    for _ in range(ticks):
+        view.tick()
+    cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+    return view.swarm.step_count - steps, cpu, wall
+
+
+def test_a_formed_swarm_with_nothing_moving_is_left_alone(viewer, monkeypatch):
+    viewer.fps = 60
+    while not viewer.swarm.complete:
+        viewer.tick()
+    viewer.tick()
+    drawn = count_draws(viewer, monkeypatch)
+    steps, cpu, wall = idle_ticks(viewer)
+    assert steps == 0 and drawn[0] == 0
+    assert wall > 0.3 and cpu < 0.5 * wall, "it waits for events, it does not spin"
+    start = time.perf_counter()
+    press(viewer, pygame.K_PLUS)  # a key still gets an answer at once
+    assert time.perf_counter() - start < 0.2 and drawn[0] == 1
+    assert viewer.swarm.step_count == viewer.swarm.completed_at[0], "no step once formed"
+
+
+def test_a_paused_window_waits_for_events(viewer, monkeypatch):
+    viewer.fps = 60
+    viewer.tick()
+    press(viewer, pygame.K_SPACE)
+    drawn = count_draws(viewer, monkeypatch)
+    steps, cpu, wall = idle_ticks(viewer)
+    assert steps == 0 and drawn[0] == 0
+    assert wall > 0.3 and cpu < 0.5 * wall
+    press(viewer, pygame.K_SPACE)
+    assert drawn[0] == 1 and viewer.swarm.step_count > 1
+
+
+def test_the_window_stops_at_max_steps_and_keeps_the_final_swarm(tmp_path):
+    view = Viewer(
+        lambda world: Swarm(world, create("paper"), 3),
+        world_of(SHAPE),
+        title="bar.png",
+        size=(640, 400),
+        fps=0,
+        max_steps=5,
+    )
+    assert "step 0/5" in view.status()
+    for _ in range(4):
+        view.tick()
+    assert view.swarm.step_count == 5 and not view.swarm.complete
+    assert "step 5/5" in view.status() and "max steps" in view.status()
+    press(view, pygame.K_PERIOD)
+    assert view.swarm.step_count == 5 and "max-steps" in view.notice
+    final = view.swarm
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    view.run()
+    assert view.swarm is final and view.swarm.step_count == 5
+
+
+def test_no_step_runs_after_the_user_quit(viewer):
+    viewer.tick()
+    before = viewer.swarm.step_count
+    press(viewer, pygame.K_q)
+    assert not viewer.running and viewer.swarm.step_count == before

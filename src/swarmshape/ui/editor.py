@@ -3,21 +3,29 @@
 The canvas is the arena itself, cell for cell ``[x, y]``, so a user paints right where the swarm
 will form the shape; the seed frame is drawn over it and can be dragged or turned, taking the
 drawing along. `Editor.shape` turns the painting into a shape in the seed frame.
+
+Saving never replaces a user's file unasked: only the editor's own PNGs (their text chunk says
+so, see `is_drawing`) are saved over without a question; anything else, and any existing file
+under a typed name, needs a yes in the window, and autosaves always get a fresh name.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import tempfile
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pygame
+from PIL import Image
 from scipy import ndimage
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.core.world import World
 from swarmshape.errors import InputError
-from swarmshape.io.bitmap import save_grid
+from swarmshape.io.bitmap import EDITOR_TAG, save_grid
 
 HISTORY = 200
 """Undo steps kept."""
@@ -26,10 +34,13 @@ MAX_BRUSH = 9
 PAINT = (240, 170, 40)
 CURSOR = (20, 20, 20)
 HELP_LINES = (
-    "left paint   right erase   drag: strokes   [ ] brush   f fill   c clear",
-    "Ctrl+Z undo   Ctrl+Y redo   Ctrl+S save   Ctrl+Shift+S save as   t turn seeds",
-    "drag a green seed to move the frame   PgUp/PgDn grid size (before a run)",
-    "Enter or e: hand the shape to the swarm   h this help",
+    "left paint   right erase   [ ] brush   f fill   c clear",
+    "Ctrl+Z undo   Ctrl+Y redo   t turn the seeds",
+    "drag a green seed: the frame and drawing move",
+    "PgUp/PgDn grid size (before a run)",
+    "Ctrl+S save   Ctrl+Shift+S save as",
+    "Enter or e: hand the shape to the swarm",
+    "h hide this help   q or Esc quit",
 )
 
 
@@ -119,8 +130,30 @@ class Canvas:
         return True
 
 
+def is_drawing(path: Path) -> bool:
+    """Whether `path` is a PNG the editor wrote: the only files saved over without asking."""
+    try:
+        with Image.open(path) as image:
+            return image.format == "PNG" and image.info.get(EDITOR_TAG) == "1"
+    except (OSError, ValueError, Image.DecompressionBombError):
+        return False
+
+
+def fresh_path(path: Path) -> Path:
+    """`path` if nothing is there, else the first free NAME-2.png, NAME-3.png, ..."""
+    candidate, number = path, 1
+    while candidate.exists():
+        number += 1
+        candidate = path.with_name(f"{path.stem}-{number}{path.suffix}")
+    return candidate
+
+
 class Editor:
-    """Mouse and keys on a `Canvas`, the seed pose, and saving; drawn over the arena."""
+    """Mouse and keys on a `Canvas`, the seed pose, and saving; drawn over the arena.
+
+    `path` is the file being edited; Ctrl+S writes straight to it only when it is absent or
+    already a drawing, and otherwise offers a fresh ``NAME.shape.png`` beside it.
+    """
 
     def __init__(
         self,
@@ -134,7 +167,11 @@ class Editor:
     ) -> None:
         self.canvas = canvas
         self.pose = pose
-        self.path = path
+        self.source = path
+        """The file opened, which names the suggestions; it may be a photo never to replace."""
+        ours = path is None or (path.suffix.lower() == ".png" and not path.exists())
+        self.path = path if ours or is_drawing(path) else None
+        """Where Ctrl+S saves without asking for a name."""
         self.agents = agents
         self.resizable = resizable
         self.fixed = fixed
@@ -143,8 +180,16 @@ class Editor:
         self.cursor: tuple[int, int] | None = None
         self.dirty = False
         self.naming: str | None = None
+        """The text typed into "save as", while it is open."""
+        self.confirming: Path | None = None
+        """An existing file waiting for a yes before it is replaced."""
+        self._question = ""
+        """What the window asks about `confirming`."""
         self.show_help = False
         self.message = ""
+        if path is not None and self.path is None:
+            why = "is not a swarmshape drawing" if path.exists() else "is not a PNG name"
+            self.message = f"{path.name} {why}: Ctrl+S saves as {self._suggestion().name}"
         self._ink: bool | None = None
         self._last: tuple[int, int] | None = None
         self._dragging_from: tuple[int, int] | None = None
@@ -155,6 +200,22 @@ class Editor:
     @property
     def seeds(self) -> np.ndarray:
         return self.pose.to_world(SEED_CELLS)
+
+    def backdrop(self, world: World, group: int) -> World:
+        """`world` as the editor shows it: the canvas's size, this group's seeds where they are
+        now and none of its old targets (the painting is drawn over it), and the other groups
+        only while they are kept out of (a resized grid drops them)."""
+        empty = np.zeros((0, 2), dtype=np.int64)
+        groups = []
+        for index, placed in enumerate(world.groups):
+            if index == group:
+                placed = dataclasses.replace(
+                    placed, pose=self.pose, targets=empty, seeds=self.seeds
+                )
+            elif not len(self.fixed):
+                placed = dataclasses.replace(placed, targets=empty, seeds=empty)
+            groups.append(placed)
+        return World(self.canvas.size, tuple(groups), world.name)
 
     def shape(self) -> Shape | None:
         """The painting as a shape in the seed frame (None while nothing is painted)."""
@@ -167,7 +228,8 @@ class Editor:
         agents = "" if self.agents is None else f"   agents {self.agents}"
         if self.agents is not None and count > self.agents:
             agents += f" (short by {count - self.agents})"
-        name = self.path.name if self.path else "untitled"
+        shown = self.path or self.source
+        name = shown.name if shown else "untitled"
         return (
             f"EDIT {name}{'*' if self.dirty else ''}   grid {width}x{height}   "
             f"brush {self.brush}   cells {count}{agents}"
@@ -175,8 +237,21 @@ class Editor:
 
     # --- events -------------------------------------------------------------------------
 
+    def prompt(self) -> str | None:
+        """The question the window shows while a save waits for the user, if one does."""
+        if self.confirming is not None:
+            return self._question
+        if self.naming is not None:
+            folder = self._folder()
+            where = "" if folder == Path() else f"   in {folder}"
+            return f"save as: {self.naming}_{where}   (Enter saves, Esc cancels)"
+        return None
+
     def handle(self, event: pygame.event.Event, cell_at: Callable) -> str | None:
-        """Apply one event; return "apply" when the user hands the shape over."""
+        """Apply one event; return "apply" when the user hands the shape over and "quit" when
+        they leave (q and Esc, except while a name is typed or a question waits)."""
+        if self.confirming is not None:
+            return self._confirm(event)
         if self.naming is not None:
             return self._type_name(event)
         if event.type == pygame.MOUSEMOTION:
@@ -219,15 +294,17 @@ class Editor:
         key, ctrl, shift = event.key, event.mod & pygame.KMOD_CTRL, event.mod & pygame.KMOD_SHIFT
         if key in (pygame.K_RETURN, pygame.K_KP_ENTER, pygame.K_e):
             return "apply"
+        if key in (pygame.K_q, pygame.K_ESCAPE):
+            return "quit"
         if ctrl and key == pygame.K_z:
             self.dirty |= self.canvas.undo()
         elif ctrl and key == pygame.K_y:
             self.dirty |= self.canvas.redo()
         elif ctrl and key == pygame.K_s:
             if shift or self.path is None:
-                self.naming = self.path.name if self.path else "shape.png"
+                self.naming = (self.path or self._suggestion()).name
             else:
-                self.save(self.path)
+                self._save_asking(self.path, typed=False)
         elif key == pygame.K_LEFTBRACKET:
             self.brush = max(1, self.brush - 1)
         elif key == pygame.K_RIGHTBRACKET:
@@ -267,11 +344,26 @@ class Editor:
         self._block_seeds()
 
     def _resize(self, by: int) -> None:
+        """Grow or shrink the grid, anchored top-left; never cut painted cells or seeds off."""
         if not self.resizable:
             self.message = "the grid size is fixed while a swarm runs on it"
             return
         width, height = self.canvas.size
         size = (max(8, width + by), max(6, height + round(by * height / width)))
+        if size == self.canvas.size:
+            self.message = f"the grid is as small as it gets, {width}x{height}"
+            return
+        cut = (self.canvas.cells >= np.array(size)).any(axis=1).sum()
+        if (self.seeds >= np.array(size)).any():
+            self.message = f"no room for the seeds in {size[0]}x{size[1]}; drag them in first"
+            return
+        if cut:
+            self.message = (
+                f"shrinking to {size[0]}x{size[1]} would cut off {cut} painted cells; "
+                "erase or move them first"
+            )
+            return
+        self.message = ""
         self._edit(lambda: self.canvas.resize(size))
         self.fixed = np.zeros((0, 2), dtype=np.int64)
         self._block_seeds()
@@ -284,7 +376,7 @@ class Editor:
         self.canvas.grid &= ~self.canvas.blocked
 
     def _type_name(self, event: pygame.event.Event) -> None:
-        """The in-window text field of "save as"."""
+        """The in-window text field of "save as"; names are taken in the drawing's folder."""
         if event.type != pygame.KEYDOWN:
             return
         if event.key == pygame.K_ESCAPE:
@@ -292,14 +384,55 @@ class Editor:
         elif event.key in (pygame.K_RETURN, pygame.K_KP_ENTER):
             name, self.naming = self.naming.strip(), None
             if name:
-                path = Path(name if name.lower().endswith(".png") else f"{name}.png")
-                self.save(path)
+                path = self._folder() / (name if name.lower().endswith(".png") else f"{name}.png")
+                self._save_asking(path, typed=True)
         elif event.key == pygame.K_BACKSPACE:
             self.naming = self.naming[:-1]
         elif event.unicode and event.unicode.isprintable():
             self.naming += event.unicode
 
+    def _confirm(self, event: pygame.event.Event) -> None:
+        """y or Enter replaces the file waiting for an answer; n or Esc keeps it."""
+        if event.type != pygame.KEYDOWN:
+            return
+        path = self.confirming
+        if event.key in (pygame.K_y, pygame.K_RETURN, pygame.K_KP_ENTER):
+            self.confirming = None
+            self.save(path)
+        elif event.key in (pygame.K_n, pygame.K_ESCAPE):
+            self.confirming = None
+            self.message = f"not saved: {path.name} kept as it was"
+
     # --- files --------------------------------------------------------------------------
+
+    def _folder(self) -> Path:
+        shown = self.path or self.source
+        return shown.parent if shown else Path()
+
+    def _suggestion(self) -> Path:
+        """A PNG name that replaces nothing: NAME.shape.png beside the file opened (NAME.png
+        for a new file named otherwise), or shape.png."""
+        source = self.source
+        stem = "shape" if source is None else source.stem
+        if source is not None and source.exists():
+            stem += ".shape"
+        return fresh_path(self._folder() / f"{stem}.png")
+
+    def _save_asking(self, path: Path, *, typed: bool) -> None:
+        """Save to `path`, first asking in the window when that would replace a file that is
+        not a drawing, or any existing file the user typed the name of."""
+        if path.is_dir():
+            self.message = f"not saved: {path} is a folder; type a file name"
+            return
+        drawing = is_drawing(path)
+        if path.exists() and (not drawing or (typed and path != self.path)):
+            what = "" if drawing else " and is not a swarmshape drawing"
+            self.confirming = path
+            self._question = (
+                f"{path.name} exists{what}: replace it?   y or Enter replaces, n or Esc keeps it"
+            )
+        else:
+            self.save(path)
 
     def save(self, path: Path) -> bool:
         """Save the shape to `path`, which becomes the file being edited."""
@@ -309,12 +442,17 @@ class Editor:
         return True
 
     def autosave(self) -> Path | None:
-        """Keep unsaved work beside the file (or here) as NAME.autosave.png; return where."""
+        """Keep unsaved work as NAME.autosave.png beside the file (or in the temporary folder
+        if that fails) under a name nothing has yet; return where, or None."""
         if not self.dirty or self.shape() is None:
             return None
-        stem = self.path.stem if self.path else "untitled"
-        target = (self.path.parent if self.path else Path()) / f"{stem}.autosave.png"
-        return target if self._write(target) else None
+        shown = self.path or self.source
+        name = f"{shown.stem if shown else 'untitled'}.autosave.png"
+        for folder in (self._folder(), Path(tempfile.gettempdir())):
+            target = fresh_path(folder / name)
+            if self._write(target):
+                return target
+        return None
 
     def _write(self, path: Path) -> bool:
         """Write the shape (as seen from the seeds) atomically; say how it went."""

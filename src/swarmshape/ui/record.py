@@ -1,7 +1,9 @@
 """Recording a run: an animation (GIF, WebP, APNG) or numbered PNG frames, drawn offscreen.
 
-Frames are kept as small palette images; when a long run would pass `MAX_FRAMES`, every
-other frame is dropped and the stride doubles, so the file stays a sane size.
+Each frame has a line of text with its step and coverage, so a frame read on its own says when
+it was taken. Frames are kept as small palette images; when a long run would pass `MAX_FRAMES`
+(fewer for large frames, see `FRAME_PIXELS`), every other frame is dropped and the stride
+doubles, so the file and the memory it takes stay a sane size.
 """
 
 from __future__ import annotations
@@ -13,22 +15,42 @@ from PIL import Image
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write
+from swarmshape.runs import Observer
 from swarmshape.ui.render import Renderer, frame
 
 ANIMATIONS = {".gif": "GIF", ".webp": "WEBP", ".png": "PNG"}
 MAX_FRAMES = 400
 FRAME_SIZE = (640, 400)
+"""The default frame size (``--record-size``)."""
+MIN_SIZE, MAX_SIZE = (64, 48), (4096, 4096)
+FRAME_PIXELS = 256_000_000
+"""Pixels an animation keeps in memory at most (one byte each): 400 frames of 640x400,
+123 of 1920x1080."""
 FRAME_MS = 40
+FRAME_FILES = "frame-[0-9][0-9][0-9][0-9][0-9][0-9][0-9].png"
+"""The names of frame files, and the only files in a frames folder this removes."""
 
 
-class Recorder:
-    """Captures every `every`-th step of a swarm; `close` writes the files."""
+class Recorder(Observer):
+    """Captures every `every`-th step of a swarm; `close` writes the files. Frames written
+    into a folder that held an earlier run's frames replace them all: at `close`, frame files
+    this run did not write are removed."""
 
     def __init__(
-        self, animation: Path | None = None, frames: Path | None = None, every: int = 1
+        self,
+        animation: Path | None = None,
+        frames: Path | None = None,
+        every: int = 1,
+        size: tuple[int, int] = FRAME_SIZE,
     ) -> None:
         if every < 1:
             raise InputError(f"--record-every must be at least 1, got {every}")
+        width, height = size
+        if not (MIN_SIZE[0] <= width <= MAX_SIZE[0] and MIN_SIZE[1] <= height <= MAX_SIZE[1]):
+            raise InputError(
+                f"--record-size must be from {MIN_SIZE[0]}x{MIN_SIZE[1]} to "
+                f"{MAX_SIZE[0]}x{MAX_SIZE[1]} pixels, got {width}x{height}"
+            )
         if animation is not None and animation.suffix.lower() not in ANIMATIONS:
             raise InputError(
                 f"{animation}: --record writes {', '.join(ANIMATIONS)} files; pick one of those"
@@ -37,8 +59,10 @@ class Recorder:
             if frames.exists() and not frames.is_dir():
                 raise InputError(f"{frames}: --frames needs a folder, and this is a file")
             frames.mkdir(parents=True, exist_ok=True)
-        self.animation, self.frames, self.every = animation, frames, every
+        self.animation, self.frames, self.every, self.size = animation, frames, every, size
+        self._keep = max(2, min(MAX_FRAMES, FRAME_PIXELS // (width * height)))
         self._images: list[Image.Image] = []
+        self._written: set[str] = set()
         self._renderer: Renderer | None = None
         self._last = -1
 
@@ -49,22 +73,33 @@ class Recorder:
         self._last = swarm.step_count
         if self._renderer is None or self._renderer.world is not swarm.world:
             self._renderer = Renderer(swarm.world)
-        image = Image.fromarray(frame(swarm, FRAME_SIZE, self._renderer)).quantize(colors=32)
+        pixels = frame(swarm, self.size, self._renderer, caption(swarm))
+        image = Image.fromarray(pixels).quantize(colors=32)
         if self.frames is not None:
             path = self.frames / f"frame-{swarm.step_count:07d}.png"
             atomic_write(path, lambda tmp: image.save(tmp, format="PNG"))
+            self._written.add(path.name)
         if self.animation is not None:
             self._images.append(image)
-            if len(self._images) > MAX_FRAMES:
+            if len(self._images) > self._keep:
                 self._images = self._images[::2]
                 self.every *= 2
 
     def close(self, swarm: Swarm) -> None:
         """Write the animation (atomically), if one was asked for; `swarm` gives the last frame."""
         self.capture(swarm, force=True)  # a run rarely ends on the stride: keep its end too
+        if self.frames is not None:
+            for stale in self.frames.glob(FRAME_FILES):
+                if stale.name not in self._written:
+                    stale.unlink()
         if self.animation is None or not self._images:
             return
         first, *rest = self._images
         options = {"save_all": True, "append_images": rest, "duration": FRAME_MS, "loop": 0}
         form = ANIMATIONS[self.animation.suffix.lower()]
         atomic_write(self.animation, lambda tmp: first.save(tmp, format=form, **options))
+
+
+def caption(swarm: Swarm) -> str:
+    """The text line of a recorded frame."""
+    return f"step {swarm.step_count}   coverage {100 * swarm.filled.mean():.1f}%"

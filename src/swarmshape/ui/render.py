@@ -19,6 +19,10 @@ FLOOR = (250, 250, 247)
 OUTSIDE = (222, 222, 216)
 TARGET = (196, 196, 196)
 SEED_GREEN = (34, 160, 60)
+LABEL_BACK = (38, 40, 46)
+LABEL_TEXT = (235, 235, 235)
+LABEL_SHARE = 1 / 22
+"""A frame's text line is this share of its height (at least 14 pixels)."""
 
 SHADES = (  # indexed by State
     lambda rgb: tuple(int(c + (255 - c) * 0.55) for c in rgb),  # waiting: pale
@@ -102,12 +106,30 @@ class Renderer:
 
 
 def frame(
-    swarm: Swarm, size: tuple[int, int] = (640, 400), renderer: Renderer | None = None
+    swarm: Swarm,
+    size: tuple[int, int] = (640, 400),
+    renderer: Renderer | None = None,
+    label: str | None = None,
 ) -> np.ndarray:
-    """The swarm drawn offscreen as an RGB array ``(height, width, 3)``, no window needed."""
+    """The swarm drawn offscreen as an RGB array ``(height, width, 3)``, no window needed;
+    with a `label`, a line of text above the arena (recordings say their step this way)."""
     surface = pygame.Surface(size)
-    (renderer or Renderer(swarm.world)).draw(surface, swarm)
+    area = surface.get_rect()
+    if label is not None:
+        font = _font(max(14, round(size[1] * LABEL_SHARE)))
+        strip = pygame.Rect(0, 0, size[0], font.get_linesize() + 2)
+        surface.fill(LABEL_BACK, strip)
+        surface.blit(font.render(label, True, LABEL_TEXT), (4, 1))
+        area = pygame.Rect(0, strip.bottom, size[0], max(1, size[1] - strip.bottom))
+    (renderer or Renderer(swarm.world)).draw(surface, swarm, area)
     return np.ascontiguousarray(pygame.surfarray.array3d(surface).transpose(1, 0, 2))
+
+
+def _font(height: int) -> pygame.font.Font:
+    """pygame's own font at a pixel height (no display needed). Made afresh each time, a
+    quarter of a millisecond: a kept one dies with any `pygame.quit`."""
+    pygame.font.init()
+    return pygame.font.Font(None, height)
 
 
 def _margins(area: pygame.Rect, inner: pygame.Rect) -> list[pygame.Rect]:

@@ -2,8 +2,11 @@
 
 Each call of `Viewer.tick` handles pending events, advances the simulation by the current
 speed, and draws one frame, so tests can post events and drive it frame by frame under
-``SDL_VIDEODRIVER=dummy``. `e` switches into the editor while the swarm keeps running; Enter
-(or `e` again) hands the painted shape to the swarm, or starts one if none runs yet.
+``SDL_VIDEODRIVER=dummy``. While nothing can change without the user (paused, formed with
+every robot at rest, no swarm yet) a tick waits for an event instead, and draws only if one
+came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
+running; Enter (or `e` again) hands the painted shape to the swarm, or starts one if none runs
+yet.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pygame
 
-from swarmshape.core.states import SETTLED
+from swarmshape.core.states import MOVING, SETTLED, WANDERING
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
@@ -30,6 +33,9 @@ SPEEDS = (0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256)
 SPARE_WHEN_PAINTED = 0.25
 """A swarm started from a painting gets this share of spare robots, to recruit on re-edits."""
 
+IDLE_WAIT_MS = 250
+"""How long an idle tick waits for an event; any event ends the wait at once."""
+
 HUD_HEIGHT = 48
 HUD_BACK = (38, 40, 46)
 HUD_TEXT = (235, 235, 235)
@@ -41,7 +47,8 @@ class Viewer:
     """A resizable window on one world; `make_swarm` builds (and on `r` rebuilds) its run.
 
     With ``start=False`` the window opens in the editor and no swarm runs until the user
-    hands over a shape.
+    hands over a shape. Like a headless run, it stops stepping once `max_steps` steps have run
+    in total (None: no limit); `swarm` is the run as it ended when the window closes.
     """
 
     def __init__(
@@ -57,6 +64,7 @@ class Viewer:
         fps: int = 60,
         screenshots: Path = Path(),
         observers: Sequence = (),
+        max_steps: int | None = None,
     ) -> None:
         pygame.display.init()  # not pygame.init(): no sound, so no audio device needed
         pygame.font.init()
@@ -74,12 +82,18 @@ class Viewer:
         self.screenshots = screenshots
         self.observers = observers
         """Recorders and traces: each captures the swarm after every step."""
+        self.max_steps = max_steps
         self.paused = False
         self.running = True
         self.notice = ""
         self._budget = 0.0
+        self._redraw = True
         self.editor: Editor | None = None
         self.editing = False
+        self._group = 0
+        """The group being edited."""
+        self._backdrop: tuple | None = None
+        """What the editor's arena was drawn for, and its renderer."""
         self._shape_file = shape_file
         if not start:
             self.start_editing()
@@ -93,17 +107,45 @@ class Viewer:
             pass
         pygame.quit()
 
+    @property
+    def out_of_steps(self) -> bool:
+        """`max_steps` steps have run in total, as `runs.Runner` counts them."""
+        swarm = self.swarm
+        return (
+            self.max_steps is not None and swarm is not None and swarm.step_count >= self.max_steps
+        )
+
+    @property
+    def idle(self) -> bool:
+        """Nothing changes unless the user acts: no swarm, paused, or formed with every robot
+        at rest and none wandering, or `max_steps` reached."""
+        swarm = self.swarm
+        if swarm is None or self.paused or self.out_of_steps:
+            return True
+        if not swarm.complete:
+            return False
+        return not (np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any())
+
     def tick(self) -> bool:
-        """One frame: events, simulation, drawing. Returns False once the user quit."""
-        for event in pygame.event.get():
+        """One frame: events, simulation, drawing. Returns False once the user quit.
+
+        When idle it waits up to `IDLE_WAIT_MS` for an event and redraws only after one."""
+        events = pygame.event.get()
+        if not events and self.idle:
+            first = pygame.event.wait(IDLE_WAIT_MS)
+            events = [first, *pygame.event.get()] if first.type != pygame.NOEVENT else []
+        for event in events:
             self.handle(event)
-        if not self.paused and self.swarm is not None:
+        if self.running and not self.idle:  # once the user quit, the run is as they saw it
             self._budget += self.speed
-            while self._budget >= 1:
+            while self._budget >= 1 and not self.idle:
                 self.step()
                 self._budget -= 1
-        self.draw()
-        pygame.display.flip()
+            self._redraw = True
+        if events or self._redraw:
+            self.draw()
+            pygame.display.flip()
+            self._redraw = False
         self.clock.tick(self.fps)
         return self.running
 
@@ -115,8 +157,13 @@ class Viewer:
         elif event.type == pygame.KEYDOWN and event.key == pygame.K_F12:
             self.notice = f"saved {self.screenshot()}"
         elif self.editing:
-            if self.editor.handle(event, self.cell_at) == "apply":
+            outcome = self.editor.handle(event, self.cell_at)
+            if outcome == "apply":
                 self.finish_editing()
+            elif outcome == "quit":
+                self.quit()
+            else:
+                self._follow_editor()
         elif event.type == pygame.KEYDOWN:
             self._key(event)
 
@@ -128,7 +175,10 @@ class Viewer:
             self.paused = not self.paused
         elif key == pygame.K_PERIOD and self.swarm is not None:
             self.paused = True
-            self.step()
+            if self.out_of_steps:
+                self.notice = f"stopped at --max-steps {self.max_steps}"
+            else:
+                self.step()
         elif key in (pygame.K_PLUS, pygame.K_EQUALS, pygame.K_KP_PLUS):
             self.speed_index = min(self.speed_index + 1, len(SPEEDS) - 1)
         elif key in (pygame.K_MINUS, pygame.K_KP_MINUS):
@@ -151,6 +201,8 @@ class Viewer:
             kept = self.editor.autosave()
             if kept is not None:
                 print(f"swarmshape: unsaved shape kept in {kept}", file=sys.stderr)
+            elif self.editor.dirty and self.editor.shape() is not None:
+                print(f"swarmshape: unsaved shape lost, {self.editor.message}", file=sys.stderr)
 
     # --- the editor ---------------------------------------------------------------------
 
@@ -160,6 +212,7 @@ class Viewer:
         others = [g for i, g in enumerate(self.world.groups) if i != group]
         fixed = np.concatenate([np.zeros((0, 2), np.int64)] + [g.targets for g in others])
         fixed = np.concatenate([fixed] + [g.seeds for g in others])
+        self._group = group
         if self.editor is None:
             self.editor = Editor(
                 Canvas(self.world.size, placed.targets),
@@ -170,6 +223,16 @@ class Viewer:
                 fixed=fixed,
             )
         self.editing = True
+        self._follow_editor()
+
+    def _follow_editor(self) -> None:
+        """Draw the arena as the editor has it now: its size, its seeds, no stale shape
+        (rebuilt only when one of those changed, not on every mouse move)."""
+        editor = self.editor
+        key = (editor.canvas.size, editor.pose, len(editor.fixed))
+        if self._backdrop != (key, self.renderer):
+            self.renderer = Renderer(editor.backdrop(self.world, self._group))
+            self._backdrop = (key, self.renderer)
 
     def finish_editing(self, group: int = 0) -> None:
         """Hand the painted shape over: re-form the running swarm, or start one."""
@@ -200,7 +263,7 @@ class Viewer:
         """The world cell under a pixel, or None outside the arena."""
         cell, (ox, oy) = self.renderer.fit(self._world_area())
         x, y = (pixel[0] - ox) // cell, (pixel[1] - oy) // cell
-        width, height = self.world.size
+        width, height = self.renderer.world.size
         return (x, y) if 0 <= x < width and 0 <= y < height else None
 
     # --- drawing ------------------------------------------------------------------------
@@ -224,7 +287,7 @@ class Viewer:
         if self.editing:
             self.editor.draw(self.screen, lambda cell: self.renderer.cell_rect(cell, area))
             if self.editor.show_help:
-                panel = pygame.Rect(area.x + 8, area.y + 8, 640, 22 * len(HELP_LINES) + 10)
+                panel = self._help_panel(area)
                 self.screen.fill(HUD_BACK, panel)
                 for row, line in enumerate(HELP_LINES):
                     self._text(line, (panel.x + 10, panel.y + 6 + 22 * row), HUD_TEXT)
@@ -233,15 +296,35 @@ class Viewer:
         self._text(self.status(), (10, 6), HUD_TEXT)
         self._text(self._second_line(), (10, 27), HUD_DIM)
 
+    def _help_panel(self, area: pygame.Rect) -> pygame.Rect:
+        """The corner of `area` where the help covers the fewest seeds, then painted cells."""
+        width = max(self.font.size(line)[0] for line in HELP_LINES) + 20
+        panel = pygame.Rect(0, 0, width, 22 * len(HELP_LINES) + 10)
+        inner = area.inflate(-16, -16)
+        corners = [
+            panel.move_to(bottomright=inner.bottomright),
+            panel.move_to(topright=inner.topright),
+            panel.move_to(bottomleft=inner.bottomleft),
+            panel.move_to(topleft=inner.topleft),
+        ]
+        size, origin = self.renderer.fit(area)
+        seeds = self.editor.seeds * size + np.array(origin)
+        painted = self.editor.canvas.cells * size + np.array(origin)
+
+        def covered(corner: pygame.Rect, cells: np.ndarray) -> int:
+            low, high = np.array(corner.topleft), np.array(corner.bottomright)
+            return int(((cells < high) & (cells + size > low)).all(axis=1).sum())
+
+        return min(corners, key=lambda c: (covered(c, seeds), covered(c, painted)))
+
     def _text(self, text: str, where: tuple[int, int], colour: tuple[int, int, int]) -> None:
         self.screen.blit(self.font.render(text, True, colour), where)
 
     def _second_line(self) -> str:
         if not self.editing:
             return self.notice or HELP
-        if self.editor.naming is not None:
-            return f"save as: {self.editor.naming}_   (Enter saves, Esc cancels)"
-        return self.editor.message or "h help   Enter: hand the shape to the swarm"
+        editor = self.editor
+        return editor.prompt() or editor.message or "h help   Enter: hand the shape to the swarm"
 
     def status(self) -> str:
         if self.editing:
@@ -254,8 +337,12 @@ class Viewer:
         missing = len(swarm.filled) - len(swarm.cell)
         if missing > 0:
             formed += f"   {missing} agents short"
+        limit = "" if self.max_steps is None else f"/{self.max_steps}"
+        if self.out_of_steps:
+            formed += "   max steps reached"
         return (
-            f"step {swarm.step_count}   settled {settled}/{len(swarm.filled)}   "
+            f"step {swarm.step_count}{limit}   settled {settled}/{len(swarm.filled)}   "
             f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "
-            f"{self.clock.get_fps():.0f} FPS   seed {swarm.seed}{formed}{paused}"
+            f"{'idle' if self.idle else f'{self.clock.get_fps():.0f} FPS'}   "
+            f"seed {swarm.seed}{formed}{paused}"
         )
