@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import pytest
 from PIL import Image
@@ -105,3 +106,94 @@ def test_a_resumed_state_may_be_saved_over_itself(tmp_path):
     state = tmp_path / "s.state"
     run(str(SHAPES / "line.png"), "--headless", "--max-steps", "5", "--save-state", str(state))
     run("--load-state", str(state), "--headless", "--max-steps", "9", "--save-state", str(state))
+
+
+def test_preview_prints_the_shape_and_runs_nothing(tmp_path, capsys):
+    assert main([HORSESHOE, "--preview", "--metrics", str(tmp_path / "m.json")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "horseshoe: 90 cells, 12x12, 90 robots, scale 1.00"
+    assert lines[1] == "#" * 12 and len(lines) == 13
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_fit_agents_sizes_the_shape_to_the_robots(tmp_path):
+    out = tmp_path / "m.json"
+    assert main([HORSESHOE, "--agents", "400", "--fit", "agents", "--preview"]) == 0
+    assert main([HORSESHOE, "--agents", "400", "--fit", "agents", "--headless", "--seed", "2",
+                 "--metrics", str(out)]) == 0  # fmt: skip
+    metrics = json.loads(out.read_text())
+    assert 300 < metrics["targets"] <= 400 and metrics["coverage"] == 1.0
+
+
+def test_many_more_robots_than_cells_is_a_warning_naming_fit(capsys):
+    assert main([HORSESHOE, "--agents", "400", "--preview"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--fit agents" in err[0] and err[0].startswith("swarmshape: warning")
+
+
+def test_progress_off_a_terminal_is_a_line_every_few_seconds(monkeypatch, capsys):
+    from swarmshape.experiments import progress
+
+    clock = iter([0.0, 3.0, 11.0, 12.0, 25.0])
+    monkeypatch.setattr(progress.time, "monotonic", lambda: next(clock))
+    bar = progress.ProgressBar()  # stderr is captured, not a terminal
+    for step in range(4):
+        bar.show(step / 4, f"step {step}")
+    bar.done()
+    assert capsys.readouterr().err == "swarmshape: step 1\nswarmshape: step 3\n"
+
+
+def test_a_window_run_stops_at_max_steps_and_writes_its_metrics(tmp_path, monkeypatch):
+    import pygame
+
+    from swarmshape.ui.viewer import Viewer
+
+    real_tick = Viewer.tick
+
+    def tick_then_quit(self):
+        if self.swarm is not None and self.swarm.step_count >= 30:
+            pygame.event.post(pygame.event.Event(pygame.QUIT))
+        return real_tick(self)
+
+    monkeypatch.setattr(Viewer, "tick", tick_then_quit)
+    out = tmp_path / "m.json"
+    assert main([HORSESHOE, "--seed", "2", "--max-steps", "30", "--metrics", str(out)]) == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["steps_run"] == 30 and metrics["steps"] is None
+
+
+def test_positions_are_exported_per_step_as_arrays_or_rows(tmp_path):
+    import numpy as np
+
+    npz, rows = tmp_path / "p.npz", tmp_path / "p.csv"
+    common = [str(SHAPES / "line.png"), "--headless", "--seed", "1"]
+    run(*common, "--positions", str(npz), "--positions-every", "5")
+    run(*common, "--positions", str(rows), "--positions-every", "5")
+    with np.load(npz) as saved:
+        steps, position = saved["step"], saved["position"]
+        assert steps[0] == 0 and (np.diff(steps)[:-1] == 5).all()
+        assert position.shape == (len(steps), 16, 2) and saved["group"].shape == (16,)
+    table = list(csv.DictReader(rows.open()))
+    assert len(table) == 16 * len(steps)
+    last = [r for r in table if int(r["step"]) == steps[-1]]
+    assert np.allclose([[float(r["x"]), float(r["y"])] for r in last], position[-1], atol=1e-5)
+
+
+def test_a_strategy_file_in_the_working_folder_runs_with_the_installed_command(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "my_strategies.py").write_text(
+        "from swarmshape.strategies.concurrent import Greedy\n"
+        "class NearestFirst(Greedy):\n    name = 'nearest-first'\n"
+    )
+    command = Path(sys.executable).parent / "swarmshape"
+    result = subprocess.run(
+        [str(command), str(SHAPES / "line.png"), "--headless", "--strategy",
+         "my_strategies.py:NearestFirst"],
+        capture_output=True, text=True, cwd=tmp_path,
+        env={**os.environ, "SDL_VIDEODRIVER": "dummy"},
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "nearest-first" in result.stdout

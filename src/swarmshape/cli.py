@@ -226,7 +226,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("swarmshape: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:  # the reader went away (| head): outputs are written already
+    except BrokenPipeError:  # the reader of a listing went away (| head)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
     except Exception:  # a bug of ours: a short word here, the whole story in a log

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,7 +101,7 @@ class Session:
             swarm = self._show(config, world, make_swarm, observers)
         else:
             swarm = make_swarm(world)
-            print(opening_line(swarm, config))
+            say(opening_line(swarm, config))
             runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
             runner.finish()
         if swarm is None:
@@ -110,7 +112,7 @@ class Session:
         if self.outputs.metrics:
             text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
             write_text(self.outputs.metrics, text)
-        print(summary_line(metrics))
+        say(summary_line(metrics))
         return metrics
 
     def _prepare(self) -> tuple[RunConfig, World, Callable[[World], Swarm]]:
@@ -141,7 +143,7 @@ class Session:
     ) -> Swarm | None:
         from swarmshape.ui.viewer import Viewer  # pygame only when a window is wanted
 
-        print(f"seed {config.seed}")
+        say(f"seed {config.seed}")
         viewer = Viewer(
             make_swarm,
             world,
@@ -157,6 +159,15 @@ class Session:
             for observer in observers:
                 observer.close(viewer.swarm)
         return viewer.swarm
+
+
+def say(line: str) -> None:
+    """Print a line of the run's report; if the reader went away (``| head -1``), carry on
+    quietly: the run and its files matter more than the report."""
+    try:
+        print(line, flush=True)
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def preview_text(world: World) -> str:

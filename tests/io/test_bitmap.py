@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from swarmshape.io.bitmap import BitmapError, load_grid, save_grid
+from swarmshape.io.bitmap import (
+    BitmapError,
+    ShapeWarning,
+    grid_for,
+    load_grid,
+    read_picture,
+    save_grid,
+)
 
 
 def write(path, array, mode=None):
@@ -110,3 +117,58 @@ def test_bad_images_say_what_is_wrong(tmp_path, name, content, message):
 def test_a_directory_is_not_an_image(tmp_path):
     with pytest.raises(BitmapError, match="directory"):
         load_grid(tmp_path)
+
+
+def test_a_small_image_grows_to_the_cells_asked_for_and_stays_its_size_otherwise(tmp_path):
+    image = np.full((4, 8), 255, dtype=np.uint8)
+    image[1:3, 2:6] = 0
+    path = write(tmp_path / "icon.png", image)
+    assert load_grid(path).shape == (2, 4), "no --cells: the image's own size"
+    grown = load_grid(path, cells=12)
+    assert grown.shape == (6, 12) and grown.all()
+
+
+def test_a_shape_that_keeps_little_of_its_picture_says_to_raise_cells(tmp_path):
+    image = np.full((200, 200), 255, dtype=np.uint8)
+    image[::5, :] = 0  # thin lines, a fifth of the picture, vanish when shrunk ...
+    image[:40, :40] = 0  # ... and only this block is left
+    path = write(tmp_path / "lines.png", image)
+    with pytest.warns(ShapeWarning, match="raise --cells"):
+        load_grid(path, cells=10)
+    assert load_grid(path, cells=200).sum() > 8_000
+
+
+def test_a_low_contrast_picture_is_told_about_the_threshold(tmp_path):
+    image = np.full((60, 60), 150, dtype=np.uint8)  # light grey ...
+    image[10:50, 10:50] = 135  # ... and a slightly darker grey square, both above 0.5
+    path = write(tmp_path / "grey.png", image)
+    with pytest.raises(BitmapError, match="another --threshold"):
+        load_grid(path)
+    assert load_grid(path, threshold=0.5 * (135 + 150) / 255).sum() > 100
+
+
+def test_a_picture_squeezed_into_a_cell_or_two_says_so(tmp_path):
+    image = np.full((40, 40), 255, dtype=np.uint8)
+    image[5:11, 5:11] = 0
+    with pytest.warns(ShapeWarning, match="the whole picture became 1 cell"):
+        assert load_grid(write(tmp_path / "speck.gif", image), cells=1).sum() == 1
+
+
+def test_the_format_comes_from_the_content_not_the_name(tmp_path):
+    image = np.full((10, 10), 255, dtype=np.uint8)
+    image[2:8, 2:8] = 0
+    Image.fromarray(image).save(tmp_path / "really.png", format="JPEG")
+    assert load_grid(tmp_path / "really.png").sum() == 36
+    Image.fromarray(image).save(tmp_path / "tiff.png", format="TIFF")
+    with pytest.raises(BitmapError, match="not an image swarmshape reads"):
+        load_grid(tmp_path / "tiff.png")
+
+
+def test_fit_finds_the_largest_shape_the_robots_can_fill(tmp_path):
+    image = np.zeros((10, 10), dtype=np.uint8)  # a filled block
+    picture = read_picture(write(tmp_path / "block.png", image))
+    for robots in (1, 50, 400, 1000):
+        grid = grid_for(picture, robots)
+        assert grid.sum() <= robots
+        side = grid.shape[0]
+        assert (side + 1) ** 2 > robots, "one cell more across would not fit"

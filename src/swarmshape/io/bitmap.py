@@ -109,32 +109,35 @@ def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
     long_side = max(picture.ink.shape)
     if picture.one_cell_per_pixel or (cells is None and long_side <= DEFAULT_CELLS):
         cells = long_side
-    grid = crop(resample(picture.ink, cells or DEFAULT_CELLS))
-    if not grid.any():
+    sized = resample(picture.ink, cells or DEFAULT_CELLS)
+    if not sized.any():
         raise BitmapError(
             f"{picture.path}: the shape vanishes at --cells {cells}; {_help(picture)}"
         )
-    expected = picture.ink.mean() * grid.size if grid.size > 2 else 1
-    if grid.sum() < LOST * expected or grid.sum() <= 2 < picture.ink.sum():
-        warnings.warn(
-            f"{picture.path}: the shape keeps {int(grid.sum())} cells of a picture that suggests "
-            f"about {max(3, round(expected))}; {_help(picture)}",
-            ShapeWarning,
-            stacklevel=2,
-        )
-    return grid
+    kept, expected = int(sized.sum()), picture.ink.mean() * sized.size
+    if kept <= 2 < picture.ink.sum():
+        lost = f"the whole picture became {kept} cell{'' if kept == 1 else 's'}"
+    elif kept < LOST * expected:
+        lost = f"the shape keeps {kept} cells where the picture suggests about {round(expected)}"
+    else:
+        return crop(sized)
+    warnings.warn(f"{picture.path}: {lost}; {_help(picture)}", ShapeWarning, stacklevel=2)
+    return crop(sized)
 
 
 def grid_for(picture: Picture, robots: int) -> np.ndarray:
     """The largest grid of the picture with at most `robots` cells (``--fit agents``)."""
 
-    def count(cells: int) -> int:
+    def grid(cells: int) -> np.ndarray:
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ShapeWarning)
-            try:
-                return int(grid_of(picture, cells).sum())
-            except BitmapError:  # vanished: too small
-                return 0
+            warnings.simplefilter("ignore", ShapeWarning)  # small on purpose
+            return grid_of(picture, cells)
+
+    def count(cells: int) -> int:
+        try:
+            return int(grid(cells).sum())
+        except BitmapError:  # vanished: too small
+            return 0
 
     low, high = 1, 2
     while count(high) <= robots and high < MAX_FIT:
@@ -144,7 +147,7 @@ def grid_for(picture: Picture, robots: int) -> np.ndarray:
         low, high = (middle, high) if count(middle) <= robots else (low, middle)
     if count(low) == 0:
         raise BitmapError(f"{picture.path}: too few robots ({robots}) to draw any of its shape")
-    return grid_of(picture, low)
+    return grid(low)
 
 
 def _help(picture: Picture) -> str:

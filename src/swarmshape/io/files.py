@@ -106,6 +106,12 @@ def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = Fal
     (or, for a `folder` output, a folder), or that would replace an existing file (or fill a
     non-empty folder) without `may_replace`. A symlink counts as the file it points to."""
     target = Path(os.path.realpath(path))
+    existing = target if folder and target.is_dir() else target.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK):
+        raise OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
+    longest = os.pathconf(existing, "PC_NAME_MAX")
+    if len(target.name.encode()) > longest:
+        raise OutputError(f"{path}: {flag} name is longer than the {longest} bytes allowed")
     if target.exists():
         mode = target.stat().st_mode
         if folder and not stat.S_ISDIR(mode):
@@ -116,12 +122,6 @@ def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = Fal
             raise OutputError(f"{path}: {flag} would replace a pipe or a device; name a file")
         if not may_replace and (not folder or any(target.iterdir())):
             raise OutputError(f"{path}: {flag} would overwrite it; add --force to allow that")
-    existing = target if folder and target.is_dir() else target.parent
-    if not existing.is_dir() or not os.access(existing, os.W_OK):
-        raise OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
-    longest = os.pathconf(existing, "PC_NAME_MAX")
-    if len(target.name.encode()) > longest:
-        raise OutputError(f"{path}: {flag} name is longer than the {longest} bytes allowed")
 
 
 def distinct_outputs(outputs: Iterable[tuple[str, Path]]) -> None:

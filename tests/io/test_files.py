@@ -1,0 +1,159 @@
+"""Outputs: written atomically, through symlinks, never over pipes or devices, never twice,
+and a failure to write is one line; inputs that are not regular files are refused at once."""
+
+from __future__ import annotations
+
+import errno
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from swarmshape.cli import main
+from swarmshape.io import files
+from swarmshape.io.files import OutputError, atomic_write, check_output
+from tests.conftest import SHAPES
+
+LINE = str(SHAPES / "line.png")
+
+
+def test_a_symlinked_output_is_written_through_and_stays_a_link(tmp_path):
+    target = tmp_path / "real.json"
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    assert main([LINE, "--headless", "--metrics", str(link), "--force"]) == 0
+    assert link.is_symlink() and '"coverage": 1.0' in target.read_text()
+
+
+def test_a_dangling_symlink_creates_its_target(tmp_path):
+    link = tmp_path / "link.json"
+    link.symlink_to(tmp_path / "new.json")
+    assert main([LINE, "--headless", "--metrics", str(link)]) == 0
+    assert link.is_symlink() and (tmp_path / "new.json").is_file()
+
+
+@pytest.mark.parametrize("option", ["--metrics", "--trace", "--save-state", "--positions"])
+def test_a_fifo_output_is_refused_and_left_alone(tmp_path, capsys, option):
+    fifo = tmp_path / ("out.csv" if option in ("--trace", "--positions") else "out.x")
+    os.mkfifo(fifo)
+    assert main([LINE, "--headless", option, str(fifo)]) == 2
+    assert "would replace a pipe or a device" in capsys.readouterr().err
+    assert fifo.is_fifo()
+
+
+def test_a_device_is_refused_even_with_force(capsys):
+    assert main([LINE, "--headless", "--metrics", "/dev/null", "--force"]) == 2
+    assert "would replace a pipe or a device" in capsys.readouterr().err
+    assert Path("/dev/null").is_char_device()
+
+
+def test_a_legal_long_name_works_and_a_too_long_one_is_refused_before_the_run(tmp_path, capsys):
+    fine = tmp_path / ("m" * 250 + ".json")
+    assert main([LINE, "--headless", "--metrics", str(fine)]) == 0
+    assert fine.is_file()
+    too_long = tmp_path / ("m" * 260 + ".json")
+    assert main([LINE, "--headless", "--metrics", str(too_long)]) == 2
+    assert "name is longer than" in capsys.readouterr().err
+
+
+def test_two_options_naming_one_file_are_refused(tmp_path, capsys):
+    out = tmp_path / "same.csv"
+    assert main([LINE, "--headless", "--trace", str(out), "--positions", str(out)]) == 2
+    assert "--trace and --positions both write it" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_full_disk_is_one_line_and_leaves_no_temporary_file(tmp_path, monkeypatch, capsys):
+    def full(*_args, **_kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "replace", full)
+    for option in ("--metrics", "--save-state"):
+        assert main([LINE, "--headless", option, str(tmp_path / "out")]) == 2
+        assert "cannot write it (No space left on device)" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupted_trace_leaves_nothing_behind(tmp_path, monkeypatch):
+    from swarmshape.core.swarm import Swarm
+
+    real_step = Swarm.step
+
+    def interrupted(self):
+        if self.step_count == 5:
+            raise KeyboardInterrupt
+        real_step(self)
+
+    monkeypatch.setattr(Swarm, "step", interrupted)
+    trace = tmp_path / "t.csv"
+    assert (
+        main([LINE, "--headless", "--trace", str(trace), "--positions", str(tmp_path / "p.csv")])
+        == 130
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_write_keeps_the_old_file_when_writing_fails(tmp_path):
+    path = tmp_path / "keep.txt"
+    path.write_text("precious")
+
+    def half(tmp):
+        Path(tmp).write_text("half")
+        raise OSError(errno.EIO, "I/O error")
+
+    with pytest.raises(OutputError, match="cannot write it"):
+        atomic_write(path, half)
+    assert path.read_text() == "precious" and list(tmp_path.iterdir()) == [path]
+
+
+def test_temporary_names_start_with_a_short_prefix(tmp_path):
+    seen = []
+    atomic_write(
+        tmp_path / ("x" * 200 + ".png"),
+        lambda tmp: seen.append(Path(tmp).name) or Path(tmp).touch(),
+    )
+    assert seen[0].startswith(files.TEMP_PREFIX) and len(seen[0]) < 40
+
+
+def test_a_frames_folder_output_may_not_be_a_file(tmp_path):
+    path = tmp_path / "f"
+    path.write_text("x")
+    with pytest.raises(OutputError, match="needs a folder"):
+        check_output(path, "--frames", may_replace=True, folder=True)
+
+
+def test_the_crash_log_is_private_and_fresh_and_survives_a_full_temp_folder(tmp_path):
+    code = (
+        "import sys, tempfile\n"
+        "from swarmshape import cli\n"
+        "def boom(args):\n    raise RuntimeError('boom')\n"
+        "cli.COMMAND_FUNCTIONS['strategies'] = boom\n"
+        "sys.exit(cli.main(['strategies']))\n"
+    )
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert result.returncode == 1 and len(result.stderr.strip().splitlines()) == 1
+    log = Path(result.stderr.strip().rsplit(" ", 1)[1])
+    assert log.parent == tmp_path and "RuntimeError: boom" in log.read_text()
+    assert oct(log.stat().st_mode & 0o777) == "0o600"
+    env["TMPDIR"] = str(tmp_path / "missing")
+    gone = subprocess.run(
+        [sys.executable, "-c", code.replace("import sys, tempfile", "import sys, tempfile\n"
+         "tempfile.tempdir = '/proc/no-such-folder'")],
+        capture_output=True, text=True, env=env,
+    )  # fmt: skip
+    lines = gone.stderr.strip().splitlines()
+    assert gone.returncode == 1 and len(lines) == 1 and "RuntimeError: boom" in lines[0]
+
+
+def test_a_closed_stdout_still_runs_to_the_end_and_writes_the_metrics(tmp_path):
+    metrics = tmp_path / "m.json"
+    command = [sys.executable, "-m", "swarmshape", LINE, "--headless", "--metrics", str(metrics)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 0 and err == b""
+    assert '"coverage": 1.0' in metrics.read_text()
