@@ -18,11 +18,13 @@ from __future__ import annotations
 import csv
 import itertools
 import json
+import math
 import os
 import time
 import tomllib
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from io import StringIO
 from pathlib import Path
 from typing import Any
@@ -32,50 +34,146 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.io.files import write_text
-from swarmshape.runs import RunConfig, build, configure, run
+from swarmshape.runs import RunConfig, build, configure, load_world, run
 
-OPTIONS = {"shapes", "strategies", "agents", "seeds", "cells", "max_steps", "order",
-           "max_speed", "max_accel", "curve_every"}  # fmt: skip
+SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
+KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+    "shapes": ("a file name", lambda v: isinstance(v, str) and v != ""),
+    "strategies": ("a strategy name", lambda v: isinstance(v, str) and v != ""),
+    "agents": ("a whole number (0: one per cell)", lambda v: _whole(v) and v >= 0),
+    "cells": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
+    "max_steps": ("a whole number of 0 or more", lambda v: _whole(v) and v >= 0),
+    "order": ("a fill order", lambda v: isinstance(v, str)),
+    "max_speed": ("a number", lambda v: _number(v)),
+    "max_accel": ("a number", lambda v: _number(v)),
+    "curve_every": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
+}
+"""Every key a sweep file may have but `seeds`, with what each of its values must be."""
 CURVE_EVERY = 10
 """Steps between the coverage samples each row keeps for coverage-over-time plots."""
+MAX_RUNS = 100_000
+"""The most runs one sweep may ask for: more is surely a slip (``seeds = 100000`` with twelve
+combinations), and would take weeks; split a real one into several sweep files."""
 
 
-def read_sweep(path: Path) -> list[dict[str, Any]]:
-    """Every run the sweep file asks for, as a plain dict (with its seed)."""
+@dataclass(frozen=True)
+class Sweep:
+    """The runs of a sweep file: every combination of its values, once per seed. Runs are made
+    one at a time as they are needed, as a list they could fill the memory."""
+
+    values: dict[str, list]
+    """Each run option (``shape``, ``strategy``, ``agents``, ...) and its values."""
+    seeds: Sequence[int]
+
+    @property
+    def count(self) -> int:
+        return math.prod(len(values) for values in self.values.values()) * len(self.seeds)
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        names = sorted(self.values)
+        for combination in itertools.product(*(self.values[name] for name in names)):
+            config = dict(zip(names, combination, strict=True))
+            for seed in self.seeds:
+                yield {**config, "seed": seed}
+
+
+def read_sweep(path: Path) -> Sweep:
+    """The runs the sweep file asks for, every value checked (shapes loaded) before any run,
+    so that a mistake is reported at once and not by the hundredth run."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such sweep file") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise InputError(f"{path}: not valid TOML ({error})") from None
-    unknown = sorted(set(data) - OPTIONS)
+    data = _read_toml(path)
+    unknown = sorted(set(data) - set(KINDS) - {"seeds"})
     if unknown:
-        expected = ", ".join(sorted(OPTIONS))
+        expected = ", ".join(sorted({*KINDS, "seeds"}))
         raise InputError(f"{path}: unknown key {unknown[0]!r}; expected one of {expected}")
     for key in ("shapes", "strategies"):
-        if not data.get(key):
+        if key not in data:
             raise InputError(f"{path}: needs {key} = [...]")
-    seeds = data.pop("seeds", 1)
-    seeds = list(range(seeds)) if isinstance(seeds, int) else seeds
-    if not isinstance(seeds, list) or not all(isinstance(s, int) for s in seeds):
-        raise InputError(f"{path}: seeds must be a count or a list of integers")
     defaults = RunConfig()
-    recorded = {"cells": defaults.cells, "max_steps": defaults.max_steps, "order": defaults.order}
-    values = {"agents": 0, **recorded, **data}
-    names = sorted(values)
-    runs = []
-    for combination in itertools.product(*(_listed(values[name]) for name in names)):
-        for seed in seeds:
-            config = dict(zip(names, combination, strict=True))
-            config["shape"] = config.pop("shapes")
-            config["strategy"] = config.pop("strategies")
-            runs.append({**config, "seed": seed})
+    values = {"agents": [0], "cells": [defaults.cells], "max_steps": [defaults.max_steps],
+              "order": [defaults.order]}  # fmt: skip
+    for key, value in data.items():
+        if key != "seeds":
+            name = {"shapes": "shape", "strategies": "strategy"}.get(key, key)
+            kind, fits = KINDS[key]
+            values[name] = _values(path, key, value, f"{kind}, or a list of them", fits)
+    runs = Sweep(values, _seeds(path, data.get("seeds", 1)))
+    if runs.count > MAX_RUNS:
+        raise InputError(
+            f"{path}: asks for {runs.count:,} runs, more than the {MAX_RUNS:,} one sweep may "
+            "hold; split it into several sweep files"
+        )
+    _check_runs(path, values)
     return runs
 
 
-def _listed(value: Any) -> list:
-    return value if isinstance(value, list) else [value]
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such sweep file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, expected a sweep .toml file") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read the sweep file ({error.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise InputError(f"{path}: not valid TOML ({error})") from None
+
+
+def _values(path: Path, key: str, value: Any, kind: str, fits: Callable[[Any], bool]) -> list:
+    """A key's values as a list (one value or a list of them), each `fits`, none twice (a
+    repeated value would run the same runs twice)."""
+    values = value if isinstance(value, list) else [value]
+    if not values:
+        raise InputError(f"{path}: {key} is an empty list; give it at least one value")
+    seen = set()
+    for item in values:
+        if not fits(item):
+            raise InputError(f"{path}: {key} must be {kind}; got {item!r}")
+        if item in seen:
+            raise InputError(f"{path}: {key} lists {item!r} twice")
+        seen.add(item)
+    return values
+
+
+def _seeds(path: Path, seeds: Any) -> Sequence[int]:
+    """A count n is the seeds 0 to n - 1."""
+    if not _whole(seeds):
+        return _values(path, "seeds", seeds, SEEDS, lambda v: _whole(v) and 0 <= v < 2**63)
+    if seeds < 1:
+        raise InputError(f"{path}: seeds must be {SEEDS}; got {seeds!r}")
+    return range(seeds)
+
+
+def _check_runs(path: Path, values: dict[str, list]) -> None:
+    """What only a run's description or its shape can tell: orders, speed limits, images,
+    scenarios and robot counts (checked once per distinct combination)."""
+    try:
+        for order in values["order"]:
+            RunConfig(order=order)
+        for speed, accel in itertools.product(
+            values.get("max_speed", [RunConfig.max_speed]),
+            values.get("max_accel", [RunConfig.max_accel]),
+        ):
+            RunConfig(max_speed=speed, max_accel=accel)
+        base = path.parent
+        for shape, cells, agents in itertools.product(
+            values["shape"], values["cells"], values["agents"]
+        ):
+            load_world(configure(base / shape, agents=agents or None, cells=cells))
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
+def _whole(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def run_key(config: dict[str, Any]) -> str:
