@@ -8,7 +8,8 @@ from PIL import Image
 from swarmshape.cli import main
 from swarmshape.errors import InputError
 from swarmshape.experiments.plot import plot_results
-from swarmshape.experiments.sweep import read_rows, read_sweep, sweep
+from swarmshape.experiments.results import read_rows
+from swarmshape.experiments.sweep import read_sweep, sweep
 from tests.conftest import SHAPES
 
 TINY = f"""

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from swarmshape.errors import InputError
-from swarmshape.experiments.sweep import read_rows
+from swarmshape.experiments.results import read_rows
 from swarmshape.io.files import atomic_write
 
 PLOTS = ("coverage", "steps")

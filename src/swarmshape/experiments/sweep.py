@@ -8,24 +8,23 @@
     max_steps = 200000
 
 Every key but `seeds` may hold one value or a list; each combination runs once per seed.
-Runs go to local processes, or with a Dask address to a Dask cluster. Each finished run is
-appended to the CSV at once, so a killed sweep resumes where it stopped: rows whose ``run``
-key is already there are skipped. At the end the file is rewritten in a stable order.
+A sweep holds at most `MAX_RUNS` runs. Runs go to local processes, or with a Dask address to
+a Dask cluster. Each finished run is added to the CSV at once (see `results`), so a killed
+sweep resumes where it stopped: rows whose ``run`` key is already there are skipped. At the
+end the rows are sorted by their settings.
 """
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
 import math
 import os
 import time
 import tomllib
-from collections.abc import Callable, Iterable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Collection, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
-from io import StringIO
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +32,7 @@ from swarmshape.core.metrics import run_metrics
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
-from swarmshape.io.files import write_text
+from swarmshape.experiments.results import open_results
 from swarmshape.runs import RunConfig, build, configure, load_world, run
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
@@ -54,6 +53,8 @@ CURVE_EVERY = 10
 MAX_RUNS = 100_000
 """The most runs one sweep may ask for: more is surely a slip (``seeds = 100000`` with twelve
 combinations), and would take weeks; split a real one into several sweep files."""
+DASK_RUNNING = 1000
+"""Runs submitted to a Dask cluster at a time: enough to keep a large one busy."""
 
 
 @dataclass(frozen=True)
@@ -217,8 +218,11 @@ class CoverageCurve:
             self.values.append(round(float(swarm.filled.mean()), 4))
 
 
-def run_sweep_file(path: Path, out: Path | None, *, dask: str | None, workers: int | None) -> int:
-    """``swarmshape sweep``: run what the file asks for that `out` lacks, with a progress bar."""
+def run_sweep_file(
+    path: Path, out: Path | None, *, dask: str | None, workers: int | None, force: bool = False
+) -> int:
+    """``swarmshape sweep``: run what the file asks for that `out` lacks, with a progress bar.
+    `force` lets `out` replace a file that is not this sweep's results."""
     runs = read_sweep(path)
     out = out or path.with_suffix(".csv")
     bar = ProgressBar()
@@ -228,6 +232,7 @@ def run_sweep_file(path: Path, out: Path | None, *, dask: str | None, workers: i
         path.parent,
         dask=dask,
         workers=workers,
+        force=force,
         progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
     )
     bar.done()
@@ -236,86 +241,87 @@ def run_sweep_file(path: Path, out: Path | None, *, dask: str | None, workers: i
 
 
 def sweep(
-    runs: list[dict[str, Any]],
+    runs: Collection[dict[str, Any]],
     out: Path,
     base: Path,
     *,
     dask: str | None = None,
     workers: int | None = None,
+    force: bool = False,
     progress: Callable[[int, int], None] | None = None,
 ) -> int:
-    """Run what `out` does not have yet (shape paths are relative to `base`); return how
-    many ran."""
-    done = {row["run"] for row in read_rows(out)}
-    todo = [config for config in runs if run_key(config) not in done]
-    finished = 0
-    for row in _on_dask(todo, base, dask) if dask else _on_processes(todo, base, workers):
-        _append(out, row)
-        finished += 1
-        if progress:
-            progress(len(done) + finished, len(runs))
-    _rewrite_sorted(out)
+    """Run what `out` does not have yet (shape paths are relative to `base`), each row added
+    as its run ends; return how many ran. `out` is checked before any run (see
+    `open_results`); `force` lets it replace a file that is not results of these settings."""
+    first = next(iter(runs), None)
+    if first is None:
+        return 0
+    settings = [f"config.{name}" for name in sorted(first)]
+    with open_results(out, settings, force=force) as results:
+        already = sum(run_key(config) in results.done for config in runs)
+        todo = (config for config in runs if run_key(config) not in results.done)
+        finished = 0
+
+        def add(row: dict[str, Any]) -> None:
+            nonlocal finished
+            results.add(row)
+            finished += 1
+            if progress:
+                progress(already + finished, len(runs))
+
+        if already < len(runs):
+            if dask:
+                _on_dask(todo, base, dask, add)
+            else:
+                _on_processes(todo, base, workers or os.cpu_count() or 1, add)
+        results.finish()
     return finished
 
 
 def _on_processes(
-    todo: list[dict[str, Any]], base: Path, workers: int | None
-) -> Iterator[dict[str, Any]]:
-    if not todo:
-        return
-    with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
-        for future in as_completed([pool.submit(run_one, config, base) for config in todo]):
-            yield future.result()
+    todo: Iterator[dict[str, Any]],
+    base: Path,
+    workers: int,
+    add: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run on local processes; runs are handed out two per worker at most, the rest wait in
+    `todo` (not in memory)."""
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        running: set[Future] = set()
+        while True:
+            for config in itertools.islice(todo, 2 * workers - len(running)):
+                running.add(pool.submit(run_one, config, base))
+            if not running:
+                return
+            finished, running = wait(running, return_when=FIRST_COMPLETED)
+            for future in finished:
+                add(future.result())
 
 
-def _on_dask(todo: list[dict[str, Any]], base: Path, address: str) -> Iterator[dict[str, Any]]:
+def _on_dask(
+    todo: Iterator[dict[str, Any]],
+    base: Path,
+    address: str,
+    add: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run on a Dask cluster; at most `DASK_RUNNING` runs are submitted at a time."""
     try:
         from dask.distributed import Client
         from dask.distributed import as_completed as dask_completed
     except ImportError:
         message = "--dask needs the cluster extra: pip install 'swarmshape[cluster]'"
         raise InputError(message) from None
-    if not todo:
-        return
     try:
         client = Client(address, timeout=10)
     except OSError as error:
         raise InputError(f"cannot reach the Dask scheduler at {address} ({error})") from None
     with client:
-        futures = client.map(run_one, todo, base=base.resolve(), pure=False)
-        for future in dask_completed(futures):
-            yield future.result()
 
+        def submit(config: dict[str, Any]):
+            return client.submit(run_one, config, base=base.resolve(), pure=False)
 
-def read_rows(path: Path) -> list[dict[str, str]]:
-    if not Path(path).exists():
-        return []
-    with Path(path).open(newline="", encoding="utf-8") as handle:
-        return list(csv.DictReader(handle))
-
-
-def _append(path: Path, row: dict[str, Any]) -> None:
-    """One finished run, written and flushed straight away (a kill loses only running ones)."""
-    fresh = not Path(path).exists() or Path(path).stat().st_size == 0
-    with Path(path).open("a", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(row))
-        if fresh:
-            writer.writeheader()
-        writer.writerow(row)
-        handle.flush()
-        os.fsync(handle.fileno())
-
-
-def _rewrite_sorted(path: Path) -> None:
-    rows = read_rows(path)
-    if not rows:
-        return
-    rows.sort(key=lambda row: row["run"])
-    lines = [list(rows[0])] + [list(row.values()) for row in rows]
-    write_text(path, _csv_text(lines))
-
-
-def _csv_text(lines: Iterable[list]) -> str:
-    buffer = StringIO()
-    csv.writer(buffer, lineterminator="\n").writerows(lines)
-    return buffer.getvalue()
+        running = dask_completed([submit(c) for c in itertools.islice(todo, DASK_RUNNING)])
+        for future in running:
+            add(future.result())
+            for config in itertools.islice(todo, 1):
+                running.add(submit(config))
