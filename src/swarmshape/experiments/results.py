@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import fcntl
 import json
 import os
 from collections.abc import Iterable, Iterator
@@ -156,15 +155,17 @@ class Results:
         self._size = size
 
     def _write(self, data: bytes) -> None:
-        """Append `data`; if that fails (a full disk, Ctrl+C), take back what got written."""
+        """Append `data` whole or not at all: when writing fails part way (a full disk, Ctrl+C)
+        the part written is taken back."""
+        view = memoryview(data)
         try:
-            view = memoryview(data)
             while view:
                 view = view[os.write(self._fd, view) :]
             os.fsync(self._fd)
         except BaseException as error:
-            with contextlib.suppress(OSError):
-                os.ftruncate(self._fd, self._size)
+            if view:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(self._fd, self._size)
             if isinstance(error, OSError):
                 raise _unwritable(self.path, error) from None
             raise
@@ -280,6 +281,11 @@ def _unwritable(path: Path, error: OSError) -> InputError:
 def _lock(path: Path) -> Iterator[None]:
     """Hold the lock file beside `path`, or refuse when another sweep holds it. The lock file
     is removed at the end (one left by a killed sweep is unlocked, and taken over)."""
+    try:
+        import fcntl
+    except ImportError:  # Windows
+        message = "sweeps need Linux or macOS: their results file is locked with flock"
+        raise InputError(message) from None
     lock = path.resolve().with_name(f".{path.name}.lock")
     while True:
         try:

@@ -20,6 +20,9 @@ import itertools
 import json
 import math
 import os
+import signal
+import sys
+import threading
 import time
 import tomllib
 from collections.abc import Callable, Collection, Iterator, Sequence
@@ -53,6 +56,8 @@ CURVE_EVERY = 10
 MAX_RUNS = 100_000
 """The most runs one sweep may ask for: more is surely a slip (``seeds = 100000`` with twelve
 combinations), and would take weeks; split a real one into several sweep files."""
+WATCH = 0.25
+"""Seconds between a worker's looks at whether its sweep is still there."""
 DASK_RUNNING = 1000
 """Runs submitted to a Dask cluster at a time: enough to keep a large one busy."""
 
@@ -226,17 +231,23 @@ def run_sweep_file(
     runs = read_sweep(path)
     out = out or path.with_suffix(".csv")
     bar = ProgressBar()
-    ran = sweep(
-        runs,
-        out,
-        path.parent,
-        dask=dask,
-        workers=workers,
-        force=force,
-        progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
-    )
+    try:
+        ran = sweep(
+            runs,
+            out,
+            path.parent,
+            dask=dask,
+            workers=workers,
+            force=force,
+            progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
+        )
+    except KeyboardInterrupt:
+        bar.done()
+        message = f"interrupted; finished runs are kept in {out}: run the same command to go on"
+        print(f"swarmshape: {message}", file=sys.stderr)
+        raise
     bar.done()
-    print(f"{out}: {ran} runs done now, {len(runs) - ran} were there already")
+    print(f"{ran} runs done now, {len(runs) - ran} were there already; the results are in {out}")
     return 0
 
 
@@ -253,6 +264,8 @@ def sweep(
     """Run what `out` does not have yet (shape paths are relative to `base`), each row added
     as its run ends; return how many ran. `out` is checked before any run (see
     `open_results`); `force` lets it replace a file that is not results of these settings."""
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers must be at least 1, got {workers}")
     first = next(iter(runs), None)
     if first is None:
         return 0
@@ -273,7 +286,8 @@ def sweep(
             if dask:
                 _on_dask(todo, base, dask, add)
             else:
-                _on_processes(todo, base, workers or os.cpu_count() or 1, add)
+                left = len(runs) - already
+                _on_processes(todo, base, min(workers or _cores(), _cores(), left), add)
         results.finish()
     return finished
 
@@ -285,17 +299,59 @@ def _on_processes(
     add: Callable[[dict[str, Any]], None],
 ) -> None:
     """Run on local processes; runs are handed out two per worker at most, the rest wait in
-    `todo` (not in memory)."""
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    `todo` (not in memory). On Ctrl+C or an error the runs under way are ended at once."""
+    with ProcessPoolExecutor(workers, initializer=_worker_setup, initargs=(os.getpid(),)) as pool:
         running: set[Future] = set()
-        while True:
-            for config in itertools.islice(todo, 2 * workers - len(running)):
-                running.add(pool.submit(run_one, config, base))
-            if not running:
-                return
-            finished, running = wait(running, return_when=FIRST_COMPLETED)
-            for future in finished:
-                add(future.result())
+        try:
+            while True:
+                for config in itertools.islice(todo, 2 * workers - len(running)):
+                    running.add(pool.submit(run_one, config, base))
+                if not running:
+                    return
+                finished, running = wait(running, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    add(future.result())
+        except BaseException:
+            processes = list(pool._processes.values())  # public only in Python 3.14
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                process.terminate()
+            raise
+
+
+def _cores() -> int:
+    """Cores this process may use: runs are CPU-bound, more workers only share them."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _worker_setup(sweep_pid: int) -> None:
+    """First thing in each pool worker: leave Ctrl+C to the sweep (a terminal sends it to the
+    workers too, and they would print tracebacks), and die with the sweep, even one killed
+    with kill -9 (its workers would otherwise run on for hours, unseen)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    parent = os.getppid()  # the sweep, or a fork server that ends with it
+    threading.Thread(target=_exit_with, args=(parent, sweep_pid), daemon=True).start()
+
+
+def _exit_with(parent: int, sweep_pid: int) -> None:
+    """Exit when the worker's parent is gone (the worker is handed to another), or the sweep
+    is (it may have died before the worker started)."""
+    while os.getppid() == parent and _alive(sweep_pid):
+        time.sleep(WATCH)
+    os._exit(1)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # a process of another user: it exists
+    return True
 
 
 def _on_dask(
