@@ -371,10 +371,11 @@ def _on_dask(
         client = Client(address, timeout=10)
     except OSError as error:
         raise InputError(f"cannot reach the Dask scheduler at {address} ({error})") from None
+    base = base.resolve()  # the cluster's workers may run elsewhere
     with client:
 
         def submit(config: dict[str, Any]):
-            return client.submit(run_one, config, base=base.resolve(), pure=False)
+            return client.submit(run_one, config, base=base, pure=False)
 
         running = dask_completed([submit(c) for c in itertools.islice(todo, DASK_RUNNING)])
         for future in running:
