@@ -8,7 +8,8 @@ from PIL import Image
 from swarmshape.cli import main
 from swarmshape.errors import InputError
 from swarmshape.experiments.plot import plot_results
-from swarmshape.experiments.sweep import read_rows, read_sweep, sweep
+from swarmshape.experiments.results import read_rows
+from swarmshape.experiments.sweep import read_sweep, sweep
 from tests.conftest import SHAPES
 
 TINY = f"""
@@ -60,7 +61,9 @@ def test_a_killed_sweep_resumes_without_redoing_finished_rows(tiny, tmp_path):
 
 def test_the_command_line_sweeps_and_plots(tiny, tmp_path, capsys):
     assert main(["sweep", str(tiny), "--workers", "2"]) == 0
-    assert "8 runs done now" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "8 runs done now" in out
+    assert f"the results are in {tmp_path / 'tiny.csv'}" in out
     assert main(["sweep", str(tiny)]) == 0
     assert "0 runs done now, 8 were there already" in capsys.readouterr().out
     paths = plot_results(tmp_path / "tiny.csv", tmp_path / "plots", ("png", "svg"))

@@ -8,22 +8,26 @@
     max_steps = 200000
 
 Every key but `seeds` may hold one value or a list; each combination runs once per seed.
-Runs go to local processes, or with a Dask address to a Dask cluster. Each finished run is
-appended to the CSV at once, so a killed sweep resumes where it stopped: rows whose ``run``
-key is already there are skipped. At the end the file is rewritten in a stable order.
+A sweep holds at most `MAX_RUNS` runs. Runs go to local processes, or with a Dask address to
+a Dask cluster. Each finished run is added to the CSV at once (see `results`), so a killed
+sweep resumes where it stopped: rows whose ``run`` key is already there are skipped. At the
+end the rows are sorted by their settings.
 """
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
+import math
 import os
+import signal
+import sys
+import threading
 import time
 import tomllib
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from io import StringIO
+from collections.abc import Callable, Collection, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,51 +35,151 @@ from swarmshape.core.metrics import run_metrics
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
-from swarmshape.io.files import write_text
-from swarmshape.runs import RunConfig, build, configure, run
+from swarmshape.experiments.results import open_results
+from swarmshape.runs import RunConfig, build, configure, load_world, run
 
-OPTIONS = {"shapes", "strategies", "agents", "seeds", "cells", "max_steps", "order",
-           "max_speed", "max_accel", "curve_every"}  # fmt: skip
+SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
+KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+    "shapes": ("a file name", lambda v: isinstance(v, str) and v != ""),
+    "strategies": ("a strategy name", lambda v: isinstance(v, str) and v != ""),
+    "agents": ("a whole number (0: one per cell)", lambda v: _whole(v) and v >= 0),
+    "cells": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
+    "max_steps": ("a whole number of 0 or more", lambda v: _whole(v) and v >= 0),
+    "order": ("a fill order", lambda v: isinstance(v, str)),
+    "max_speed": ("a number", lambda v: _number(v)),
+    "max_accel": ("a number", lambda v: _number(v)),
+    "curve_every": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
+}
+"""Every key a sweep file may have but `seeds`, with what each of its values must be."""
 CURVE_EVERY = 10
 """Steps between the coverage samples each row keeps for coverage-over-time plots."""
+MAX_RUNS = 100_000
+"""The most runs one sweep may ask for: more is surely a slip (``seeds = 100000`` with twelve
+combinations), and would take weeks; split a real one into several sweep files."""
+WATCH = 0.25
+"""Seconds between a worker's looks at whether its sweep is still there."""
+DASK_RUNNING = 1000
+"""Runs submitted to a Dask cluster at a time: enough to keep a large one busy."""
 
 
-def read_sweep(path: Path) -> list[dict[str, Any]]:
-    """Every run the sweep file asks for, as a plain dict (with its seed)."""
+@dataclass(frozen=True)
+class Sweep:
+    """The runs of a sweep file: every combination of its values, once per seed. Runs are made
+    one at a time as they are needed, as a list they could fill the memory."""
+
+    values: dict[str, list]
+    """Each run option (``shape``, ``strategy``, ``agents``, ...) and its values."""
+    seeds: Sequence[int]
+
+    @property
+    def count(self) -> int:
+        return math.prod(len(values) for values in self.values.values()) * len(self.seeds)
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        names = sorted(self.values)
+        for combination in itertools.product(*(self.values[name] for name in names)):
+            config = dict(zip(names, combination, strict=True))
+            for seed in self.seeds:
+                yield {**config, "seed": seed}
+
+
+def read_sweep(path: Path) -> Sweep:
+    """The runs the sweep file asks for, every value checked (shapes loaded) before any run,
+    so that a mistake is reported at once and not by the hundredth run."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such sweep file") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise InputError(f"{path}: not valid TOML ({error})") from None
-    unknown = sorted(set(data) - OPTIONS)
+    data = _read_toml(path)
+    unknown = sorted(set(data) - set(KINDS) - {"seeds"})
     if unknown:
-        expected = ", ".join(sorted(OPTIONS))
+        expected = ", ".join(sorted({*KINDS, "seeds"}))
         raise InputError(f"{path}: unknown key {unknown[0]!r}; expected one of {expected}")
     for key in ("shapes", "strategies"):
-        if not data.get(key):
+        if key not in data:
             raise InputError(f"{path}: needs {key} = [...]")
-    seeds = data.pop("seeds", 1)
-    seeds = list(range(seeds)) if isinstance(seeds, int) else seeds
-    if not isinstance(seeds, list) or not all(isinstance(s, int) for s in seeds):
-        raise InputError(f"{path}: seeds must be a count or a list of integers")
     defaults = RunConfig()
-    recorded = {"cells": defaults.cells, "max_steps": defaults.max_steps, "order": defaults.order}
-    values = {"agents": 0, **recorded, **data}
-    names = sorted(values)
-    runs = []
-    for combination in itertools.product(*(_listed(values[name]) for name in names)):
-        for seed in seeds:
-            config = dict(zip(names, combination, strict=True))
-            config["shape"] = config.pop("shapes")
-            config["strategy"] = config.pop("strategies")
-            runs.append({**config, "seed": seed})
+    values = {"agents": [0], "cells": [defaults.cells], "max_steps": [defaults.max_steps],
+              "order": [defaults.order]}  # fmt: skip
+    for key, value in data.items():
+        if key != "seeds":
+            name = {"shapes": "shape", "strategies": "strategy"}.get(key, key)
+            kind, fits = KINDS[key]
+            values[name] = _values(path, key, value, f"{kind}, or a list of them", fits)
+    runs = Sweep(values, _seeds(path, data.get("seeds", 1)))
+    if runs.count > MAX_RUNS:
+        raise InputError(
+            f"{path}: asks for {runs.count:,} runs, more than the {MAX_RUNS:,} one sweep may "
+            "hold; split it into several sweep files"
+        )
+    _check_runs(path, values)
     return runs
 
 
-def _listed(value: Any) -> list:
-    return value if isinstance(value, list) else [value]
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such sweep file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, expected a sweep .toml file") from None
+    except OSError as error:
+        raise InputError(f"{path}: cannot read the sweep file ({error.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise InputError(f"{path}: not valid TOML ({error})") from None
+
+
+def _values(path: Path, key: str, value: Any, kind: str, fits: Callable[[Any], bool]) -> list:
+    """A key's values as a list (one value or a list of them), each `fits`, none twice (a
+    repeated value would run the same runs twice)."""
+    values = value if isinstance(value, list) else [value]
+    if not values:
+        raise InputError(f"{path}: {key} is an empty list; give it at least one value")
+    seen = set()
+    for item in values:
+        if not fits(item):
+            raise InputError(f"{path}: {key} must be {kind}; got {item!r}")
+        if item in seen:
+            raise InputError(f"{path}: {key} lists {item!r} twice")
+        seen.add(item)
+    return values
+
+
+def _seeds(path: Path, seeds: Any) -> Sequence[int]:
+    """A count n is the seeds 0 to n - 1."""
+    if not _whole(seeds):
+        return _values(path, "seeds", seeds, SEEDS, lambda v: _whole(v) and 0 <= v < 2**63)
+    if seeds < 1:
+        raise InputError(f"{path}: seeds must be {SEEDS}; got {seeds!r}")
+    return range(seeds)
+
+
+def _check_runs(path: Path, values: dict[str, list]) -> None:
+    """What only a run's description or its shape can tell: orders, speed limits, images,
+    scenarios and robot counts (checked once per distinct combination)."""
+    try:
+        for order in values["order"]:
+            RunConfig(order=order)
+        for speed, accel in itertools.product(
+            values.get("max_speed", [RunConfig.max_speed]),
+            values.get("max_accel", [RunConfig.max_accel]),
+        ):
+            RunConfig(max_speed=speed, max_accel=accel)
+        base = path.parent
+        for shape, cells, agents in itertools.product(
+            values["shape"], values["cells"], values["agents"]
+        ):
+            load_world(configure(base / shape, agents=agents or None, cells=cells))
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+
+
+def _whole(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def run_key(config: dict[str, Any]) -> str:
@@ -119,105 +223,162 @@ class CoverageCurve:
             self.values.append(round(float(swarm.filled.mean()), 4))
 
 
-def run_sweep_file(path: Path, out: Path | None, *, dask: str | None, workers: int | None) -> int:
-    """``swarmshape sweep``: run what the file asks for that `out` lacks, with a progress bar."""
+def run_sweep_file(
+    path: Path, out: Path | None, *, dask: str | None, workers: int | None, force: bool = False
+) -> int:
+    """``swarmshape sweep``: run what the file asks for that `out` lacks, with a progress bar.
+    `force` lets `out` replace a file that is not this sweep's results."""
     runs = read_sweep(path)
     out = out or path.with_suffix(".csv")
     bar = ProgressBar()
-    ran = sweep(
-        runs,
-        out,
-        path.parent,
-        dask=dask,
-        workers=workers,
-        progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
-    )
+    try:
+        ran = sweep(
+            runs,
+            out,
+            path.parent,
+            dask=dask,
+            workers=workers,
+            force=force,
+            progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
+        )
+    except KeyboardInterrupt:
+        bar.done()
+        message = f"interrupted; finished runs are kept in {out}: run the same command to go on"
+        print(f"swarmshape: {message}", file=sys.stderr)
+        raise
     bar.done()
-    print(f"{out}: {ran} runs done now, {len(runs) - ran} were there already")
+    print(f"{ran} runs done now, {len(runs) - ran} were there already; the results are in {out}")
     return 0
 
 
 def sweep(
-    runs: list[dict[str, Any]],
+    runs: Collection[dict[str, Any]],
     out: Path,
     base: Path,
     *,
     dask: str | None = None,
     workers: int | None = None,
+    force: bool = False,
     progress: Callable[[int, int], None] | None = None,
 ) -> int:
-    """Run what `out` does not have yet (shape paths are relative to `base`); return how
-    many ran."""
-    done = {row["run"] for row in read_rows(out)}
-    todo = [config for config in runs if run_key(config) not in done]
-    finished = 0
-    for row in _on_dask(todo, base, dask) if dask else _on_processes(todo, base, workers):
-        _append(out, row)
-        finished += 1
-        if progress:
-            progress(len(done) + finished, len(runs))
-    _rewrite_sorted(out)
+    """Run what `out` does not have yet (shape paths are relative to `base`), each row added
+    as its run ends; return how many ran. `out` is checked before any run (see
+    `open_results`); `force` lets it replace a file that is not results of these settings."""
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers must be at least 1, got {workers}")
+    first = next(iter(runs), None)
+    if first is None:
+        return 0
+    settings = [f"config.{name}" for name in sorted(first)]
+    with open_results(out, settings, force=force) as results:
+        already = sum(run_key(config) in results.done for config in runs)
+        todo = (config for config in runs if run_key(config) not in results.done)
+        finished = 0
+
+        def add(row: dict[str, Any]) -> None:
+            nonlocal finished
+            results.add(row)
+            finished += 1
+            if progress:
+                progress(already + finished, len(runs))
+
+        if already < len(runs):
+            if dask:
+                _on_dask(todo, base, dask, add)
+            else:
+                left = len(runs) - already
+                _on_processes(todo, base, min(workers or _cores(), _cores(), left), add)
+        results.finish()
     return finished
 
 
 def _on_processes(
-    todo: list[dict[str, Any]], base: Path, workers: int | None
-) -> Iterator[dict[str, Any]]:
-    if not todo:
-        return
-    with ProcessPoolExecutor(max_workers=workers or os.cpu_count()) as pool:
-        for future in as_completed([pool.submit(run_one, config, base) for config in todo]):
-            yield future.result()
+    todo: Iterator[dict[str, Any]],
+    base: Path,
+    workers: int,
+    add: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run on local processes; runs are handed out two per worker at most, the rest wait in
+    `todo` (not in memory). On Ctrl+C or an error the runs under way are ended at once."""
+    with ProcessPoolExecutor(workers, initializer=_worker_setup, initargs=(os.getpid(),)) as pool:
+        running: set[Future] = set()
+        try:
+            while True:
+                for config in itertools.islice(todo, 2 * workers - len(running)):
+                    running.add(pool.submit(run_one, config, base))
+                if not running:
+                    return
+                finished, running = wait(running, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    add(future.result())
+        except BaseException:
+            processes = list(pool._processes.values())  # public only in Python 3.14
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                process.terminate()
+            raise
 
 
-def _on_dask(todo: list[dict[str, Any]], base: Path, address: str) -> Iterator[dict[str, Any]]:
+def _cores() -> int:
+    """Cores this process may use: runs are CPU-bound, more workers only share them."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _worker_setup(sweep_pid: int) -> None:
+    """First thing in each pool worker: leave Ctrl+C to the sweep (a terminal sends it to the
+    workers too, and they would print tracebacks), and die with the sweep, even one killed
+    with kill -9 (its workers would otherwise run on for hours, unseen)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    parent = os.getppid()  # the sweep, or a fork server that ends with it
+    threading.Thread(target=_exit_with, args=(parent, sweep_pid), daemon=True).start()
+
+
+def _exit_with(parent: int, sweep_pid: int) -> None:
+    """Exit when the worker's parent is gone (the worker is handed to another), or the sweep
+    is (it may have died before the worker started)."""
+    while os.getppid() == parent and _alive(sweep_pid):
+        time.sleep(WATCH)
+    os._exit(1)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # a process of another user: it exists
+    return True
+
+
+def _on_dask(
+    todo: Iterator[dict[str, Any]],
+    base: Path,
+    address: str,
+    add: Callable[[dict[str, Any]], None],
+) -> None:
+    """Run on a Dask cluster; at most `DASK_RUNNING` runs are submitted at a time."""
     try:
         from dask.distributed import Client
         from dask.distributed import as_completed as dask_completed
     except ImportError:
         message = "--dask needs the cluster extra: pip install 'swarmshape[cluster]'"
         raise InputError(message) from None
-    if not todo:
-        return
     try:
         client = Client(address, timeout=10)
     except OSError as error:
         raise InputError(f"cannot reach the Dask scheduler at {address} ({error})") from None
+    base = base.resolve()  # the cluster's workers may run elsewhere
     with client:
-        futures = client.map(run_one, todo, base=base.resolve(), pure=False)
-        for future in dask_completed(futures):
-            yield future.result()
 
+        def submit(config: dict[str, Any]):
+            return client.submit(run_one, config, base=base, pure=False)
 
-def read_rows(path: Path) -> list[dict[str, str]]:
-    if not Path(path).exists():
-        return []
-    with Path(path).open(newline="", encoding="utf-8") as handle:
-        return list(csv.DictReader(handle))
-
-
-def _append(path: Path, row: dict[str, Any]) -> None:
-    """One finished run, written and flushed straight away (a kill loses only running ones)."""
-    fresh = not Path(path).exists() or Path(path).stat().st_size == 0
-    with Path(path).open("a", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(row))
-        if fresh:
-            writer.writeheader()
-        writer.writerow(row)
-        handle.flush()
-        os.fsync(handle.fileno())
-
-
-def _rewrite_sorted(path: Path) -> None:
-    rows = read_rows(path)
-    if not rows:
-        return
-    rows.sort(key=lambda row: row["run"])
-    lines = [list(rows[0])] + [list(row.values()) for row in rows]
-    write_text(path, _csv_text(lines))
-
-
-def _csv_text(lines: Iterable[list]) -> str:
-    buffer = StringIO()
-    csv.writer(buffer, lineterminator="\n").writerows(lines)
-    return buffer.getvalue()
+        running = dask_completed([submit(c) for c in itertools.islice(todo, DASK_RUNNING)])
+        for future in running:
+            add(future.result())
+            for config in itertools.islice(todo, 1):
+                running.add(submit(config))

@@ -1,0 +1,145 @@
+"""Plots of a sweep's results: one line per setting, and one clear error for a bad file."""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+
+import matplotlib
+import pytest
+
+from swarmshape.cli import main
+from swarmshape.experiments.plot import plot_results
+from swarmshape.experiments.sweep import read_sweep, sweep
+from tests.conftest import SHAPES
+
+TINY = f"""
+shapes = ["{SHAPES / "line.png"}"]
+strategies = ["optimal", "greedy"]
+agents = [0, 20]
+seeds = 2
+"""
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    """The tiny sweep's results: line.png (16 cells) with 16 and 20 robots, two seeds each."""
+    folder = tmp_path_factory.mktemp("results")
+    (folder / "tiny.toml").write_text(TINY)
+    sweep(read_sweep(folder / "tiny.toml"), folder / "tiny.csv", folder, workers=2)
+    return folder / "tiny.csv"
+
+
+def rows_of(path):
+    with path.open(newline="") as handle:
+        return list(csv.reader(handle))
+
+
+def csv_text(rows):
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerows(rows)
+    return buffer.getvalue()
+
+
+def changed(results, column, value):
+    """The results with `column` of the first row set to `value`."""
+    rows = rows_of(results)
+    rows[1][rows[0].index(column)] = value
+    return csv_text(rows)
+
+
+def without(results, column):
+    rows = rows_of(results)
+    index = rows[0].index(column)
+    return csv_text([row[:index] + row[index + 1 :] for row in rows])
+
+
+def legend(path):
+    """The legend texts of an SVG drawn with text kept as text."""
+    return re.findall(r"<text[^>]*>([^<]*)</text>", path.read_text())
+
+
+BAD = {
+    "empty": (lambda r: "", "bad.csv: not a swarmshape sweep CSV (it is empty)"),
+    "header only": (lambda r: r.read_text().splitlines(keepends=True)[0],
+                    "bad.csv: no sweep results in it"),
+    "missing column": (lambda r: without(r, "steps"),
+                       "bad.csv: lacks the column steps, which the plots need"),
+    "steps not a number": (lambda r: changed(r, "steps", "many"),
+                           "bad.csv: row 1: steps is not a number, got 'many'"),
+    "agents not whole": (lambda r: changed(r, "agents", "2.5"),
+                         "bad.csv: row 1: agents is not a whole number of at least 1, got '2.5'"),
+    "curve_every zero": (lambda r: changed(r, "curve_every", "0"),
+                         "bad.csv: row 1: curve_every is not a whole number of at least 1"),
+    "steps not finite": (lambda r: changed(r, "steps", "nan"), "row 1: steps is not a number"),
+    "bad JSON curve": (lambda r: changed(r, "coverage_curve", "[0.1,"),
+                       "bad.csv: row 1: coverage_curve is not a list of numbers"),
+    "curve of text": (lambda r: changed(r, "coverage_curve", '["a"]'),
+                      "row 1: coverage_curve is not a list of numbers"),
+    "curve too short": (lambda r: changed(r, "coverage_curve", "[0.5]"),
+                        "row 1: coverage_curve has 1 values, where steps_run"),
+    "cut short": (lambda r: r.read_text()[:-20], "bad.csv: line 9 is cut short"),
+    "binary": (lambda r: b"\x89PNG\r\n\x1a\n\x00\xff\xfe", "bad.csv: not a swarmshape sweep CSV"),
+    "another CSV": (lambda r: "x,y\n1,2\n", "bad.csv: not a swarmshape sweep CSV"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_a_bad_results_file_is_one_clear_line(results, tmp_path, capsys, case):
+    make, message = BAD[case]
+    bad = tmp_path / "bad.csv"
+    content = make(results)
+    bad.write_bytes(content if isinstance(content, bytes) else content.encode())
+    assert main(["plot", str(bad), "--out", str(tmp_path / "plots")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "plots").exists()
+
+
+@pytest.mark.parametrize(
+    ("target", "message"),
+    [("nope.csv", "nope.csv: no such file"), (".", "is a directory, expected a sweep's results")],
+)
+def test_a_missing_file_or_a_folder_is_one_clear_line(tmp_path, capsys, target, message):
+    assert main(["plot", str(tmp_path / target), "--out", str(tmp_path / "plots")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+
+
+def test_plots_into_a_file_are_one_clear_line(results, tmp_path, capsys):
+    (tmp_path / "taken").write_text("mine")
+    assert main(["plot", str(results), "--out", str(tmp_path / "taken")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "taken: cannot make the folder for the plots" in err[0], err
+
+
+def test_coverage_is_drawn_per_strategy_and_robot_count(results, tmp_path, monkeypatch):
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
+    plot_results(results, tmp_path, ("svg",))
+    assert sorted(t for t in legend(tmp_path / "coverage.svg") if "robots" in t) == [
+        "greedy, 16 robots (2 runs)",
+        "greedy, 20 robots (2 runs)",
+        "optimal, 16 robots (2 runs)",
+        "optimal, 20 robots (2 runs)",
+    ]
+    assert {"greedy", "optimal"} <= set(legend(tmp_path / "steps.svg"))
+
+
+def test_several_shapes_are_told_apart(tmp_path, monkeypatch):
+    sweep_file = tmp_path / "two.toml"
+    sweep_file.write_text(
+        TINY.replace('"]', f'", "{SHAPES / "small-square.png"}"]', 1)
+        .replace("agents = [0, 20]", "agents = 0\nmax_speed = [0.5, 1.0]")
+        .replace('["optimal", "greedy"]', '"optimal"')
+    )
+    sweep(read_sweep(sweep_file), tmp_path / "two.csv", tmp_path, workers=2)
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
+    plot_results(tmp_path / "two.csv", tmp_path, ("svg",))
+    labels = sorted(t for t in legend(tmp_path / "coverage.svg") if "robots" in t)
+    assert labels == [
+        "line.png, optimal, max_speed 0.5, 16 robots (2 runs)",
+        "line.png, optimal, max_speed 1.0, 16 robots (2 runs)",
+        "small-square.png, optimal, max_speed 0.5, 36 robots (2 runs)",
+        "small-square.png, optimal, max_speed 1.0, 36 robots (2 runs)",
+    ]
