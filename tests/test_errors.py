@@ -70,6 +70,8 @@ def bad_files(tmp_path_factory) -> Path:
         "[[groups]]\nname = 'a'\nshape = 'one.png'\n[[groups]]\nname = 'a'\nshape = 'one.png'\n"
     )
     (folder / "code.toml").write_text("strategy = 'this:X'\n[[groups]]\nshape = 'one.png'\n")
+    (folder / "code-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['evil:X']\n")
+    (folder / "nope-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['nope']\n")
     (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
     (folder / "letters.csv").write_text("x,y\na,b\n")
     (folder / "broken_strategy.py").write_text(

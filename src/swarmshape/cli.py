@@ -91,6 +91,11 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--out", type=Path, help="results CSV (default: beside the sweep file)")
     sweep.add_argument("--workers", type=int, help="local processes (default: one per core)")
     sweep.add_argument("--dask", metavar="ADDRESS", help="run on a Dask cluster, tcp://HOST:PORT")
+    sweep.add_argument(
+        "--force",
+        action="store_true",
+        help="let --out replace a file that is not this sweep's results, or start one over",
+    )
     plot = commands.add_parser("plot", help="plot a sweep's results (needs the plot extra)")
     plot.add_argument("results", type=Path, help="a CSV written by swarmshape sweep")
     plot.add_argument("--out", type=Path, help="folder for the plots (default: beside it)")
@@ -306,7 +311,9 @@ def _nothing_that_a_resume_ignores(args: argparse.Namespace, given: dict) -> Non
 def run_sweep(args: argparse.Namespace) -> int:
     from swarmshape.experiments.sweep import run_sweep_file
 
-    return run_sweep_file(args.file, args.out, dask=args.dask, workers=args.workers)
+    return run_sweep_file(
+        args.file, args.out, dask=args.dask, workers=args.workers, force=args.force
+    )
 
 
 def run_plot(args: argparse.Namespace) -> int:

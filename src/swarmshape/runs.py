@@ -146,6 +146,14 @@ def configure(shape: str | Path | None = None, **given: Any) -> RunConfig:
     return RunConfig(shape=path, **{**from_file, **chosen}).seeded()
 
 
+def registered_strategy(name: str) -> None:
+    """Refuse, up front, a strategy that is not registered or installed: files of settings
+    (scenarios, sweeps) are data and never name code."""
+    if strategies.is_code(name):
+        raise InputError(f"strategy {name!r} points at code; name a registered or installed one")
+    strategies.get(name)
+
+
 def bundled_shapes() -> Path:
     """The shipped shapes: inside an installed wheel, or the source checkout's shapes/."""
     installed = resources.files("swarmshape") / "shapes"

@@ -61,8 +61,8 @@ def test_a_sweep_over_the_cap_is_refused_saying_how_many_runs_it_asks_for(tmp_pa
         ("agents = [10, 10]", "agents lists 10 twice"),
         ("agents = {a = 1}", "agents must be a whole number"),
         ("max_speed = 'fast'", "max_speed must be a number, or a list of them; got 'fast'"),
-        ("max_speed = 3", "max speed must be in (0, 1] cells per step, got 3"),
-        ("max_speed = 0.25\nmax_accel = 0.5", "max acceleration must be in (0, max speed]"),
+        ("max_speed = 3", "max speed must be in [0.001, 1] cells per step, got 3"),
+        ("max_speed = 0.25\nmax_accel = 0.5", "max acceleration must be in [0.001, max speed]"),
         ("cells = 0", "cells must be a whole number of at least 1"),
         ("curve_every = -2", "curve_every must be a whole number of at least 1, or a list of "
          "them; got -2"),
@@ -122,7 +122,7 @@ def test_good_values_make_every_combination_once_per_seed(tmp_path):
     assert len(runs) == 8
     assert runs[0] == {
         "agents": 0,
-        "cells": 32,
+        "cells": None,
         "curve_every": 5,
         "max_speed": 0.5,
         "max_steps": 500_000,

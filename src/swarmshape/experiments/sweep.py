@@ -36,7 +36,15 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
-from swarmshape.runs import RunConfig, build, configure, load_world, run
+from swarmshape.runs import (
+    Observer,
+    RunConfig,
+    build,
+    configure,
+    load_world,
+    registered_strategy,
+    run,
+)
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
 KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
@@ -51,6 +59,8 @@ KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "curve_every": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
 }
 """Every key a sweep file may have but `seeds`, with what each of its values must be."""
+INTERRUPTED = 130
+"""Exit status after Ctrl+C, as a shell reports it."""
 CURVE_EVERY = 10
 """Steps between the coverage samples each row keeps for coverage-over-time plots."""
 MAX_RUNS = 100_000
@@ -155,9 +165,11 @@ def _seeds(path: Path, seeds: Any) -> Sequence[int]:
 
 
 def _check_runs(path: Path, values: dict[str, list]) -> None:
-    """What only a run's description or its shape can tell: orders, speed limits, images,
-    scenarios and robot counts (checked once per distinct combination)."""
+    """What only a run's description or its shape can tell: strategies, orders, speed limits,
+    images, scenarios and robot counts (checked once per distinct combination)."""
     try:
+        for strategy in values["strategy"]:
+            registered_strategy(strategy)
         for order in values["order"]:
             RunConfig(order=order)
         for speed, accel in itertools.product(
@@ -207,7 +219,7 @@ def run_one(config: dict[str, Any], base: Path) -> dict[str, Any]:
     }
 
 
-class CoverageCurve:
+class CoverageCurve(Observer):
     """Coverage every `every` steps and where the run ended: an observer for one sweep row."""
 
     def __init__(self, every: int) -> None:
@@ -245,7 +257,7 @@ def run_sweep_file(
         bar.done()
         message = f"interrupted; finished runs are kept in {out}: run the same command to go on"
         print(f"swarmshape: {message}", file=sys.stderr)
-        raise
+        return INTERRUPTED
     bar.done()
     print(f"{ran} runs done now, {len(runs) - ran} were there already; the results are in {out}")
     return 0
