@@ -2,7 +2,9 @@
 
 Cells are addressed by flat *keys* into the walled grid, so a neighbour is a key plus a fixed
 offset and never needs a bounds check. A robot holds the cell it is in and every cell it has
-reserved ahead; seeds hold theirs for good. This is the one record of who is where.
+reserved ahead; seeds hold theirs for good. A cell whose robot is leaving it may also have one
+robot *queued* for it, which takes it over the moment it is left. This is the one record of
+who is where.
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ class Lattice:
         self.grid[...] = FREE
         self.owner = np.full(len(self.holder), -1, dtype=np.int64)
         """Per key: the group whose target is there, or -1."""
+        self.queued = np.full(len(self.holder), FREE, dtype=np.int64)
+        """Per key: the robot that takes the cell over when its holder has left it, or FREE."""
 
     @property
     def grid(self) -> np.ndarray:
@@ -44,7 +48,19 @@ class Lattice:
         self.owner[:] = -1
         self.owner[self.key(targets)] = groups
 
-    def enterable(self, keys: np.ndarray, groups: np.ndarray) -> np.ndarray:
-        """Free cells that are not another group's target (a group's shape is its own)."""
+    def allows(self, keys: np.ndarray, groups: np.ndarray) -> np.ndarray:
+        """Cells that are not another group's target (a group's shape is its own)."""
         owner = self.owner[keys]
-        return (self.holder[keys] == FREE) & ((owner < 0) | (owner == groups))
+        return (owner < 0) | (owner == groups)
+
+    def enterable(self, keys: np.ndarray, groups: np.ndarray) -> np.ndarray:
+        """Free cells that are not another group's target."""
+        return (self.holder[keys] == FREE) & self.allows(keys, groups)
+
+    def leave(self, keys: np.ndarray) -> np.ndarray:
+        """The holders have left these cells: each goes to the robot queued for it, if any.
+        Return those robots."""
+        takers = self.queued[keys]
+        self.holder[keys] = takers
+        self.queued[keys] = FREE
+        return takers[takers >= 0]

@@ -348,8 +348,8 @@ class Steering:
         first, second = self._preferences(movers, origin)
         origin_key = lattice.key(origin)
         groups = swarm.group[movers]
-        first_free = lattice.enterable(origin_key + lattice.offsets[first], groups)
-        second_free = lattice.enterable(origin_key + lattice.offsets[second], groups)
+        first_free = swarm.enterable(origin_key + lattice.offsets[first], groups, first)
+        second_free = swarm.enterable(origin_key + lattice.offsets[second], groups, second)
         is_starter = np.arange(len(movers)) < starters
         use_second = ~first_free & second_free & (second > 0) & is_starter
         chosen = np.where(use_second, second, first)

@@ -16,7 +16,7 @@ import numpy as np
 
 from swarmshape.core.audit import overlaps
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
-from swarmshape.core.motion import STEPS, TOUCH, Limits, advance, positions, resolve_claims
+from swarmshape.core.motion import STEPS, TOUCH, Limits, positions, resolve_claims, step_sizes
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.states import WAITING, State
 from swarmshape.core.world import World, WorldError
@@ -25,8 +25,12 @@ from swarmshape.errors import InputError
 if TYPE_CHECKING:
     from swarmshape.core.shape import Pose, Shape
 
+FOLLOW_PASSES = 64
+"""Passes that let a train of robots following each other start and stop as one (each pass
+frees one more link; a longer train moves with a short ripple)."""
+
 ARRAYS = ("cell", "start_cell", "direction", "ahead", "offset", "speed", "distance", "state",
-          "filled", "overlaps")  # fmt: skip
+          "filled", "overlaps", "leader")  # fmt: skip
 """Per-robot (and per-target, per-group) arrays that a saved run keeps."""
 
 
@@ -116,6 +120,8 @@ class Swarm:
         self.distance = np.zeros(n)
         """Cells travelled."""
         self.state = np.full(n, WAITING, dtype=np.int8)
+        self.leader = np.full(n, -1, dtype=np.int64)
+        """The robot each robot follows into a cell it is leaving, or -1."""
         self.lattice = Lattice(world.size)
         self.lattice.grid[self.cell[:, 0], self.cell[:, 1]] = np.arange(n)
         self.filled = np.zeros(len(world.targets), dtype=bool)
@@ -155,6 +161,7 @@ class Swarm:
             "completed_at": self.completed_at,
             **{name: getattr(self, name) for name in ARRAYS},
             "holder": self.lattice.holder,
+            "queued": self.lattice.queued,
         }
         values |= prefixed("world", self.world.snapshot())
         return values | prefixed("driver", self.driver.snapshot())
@@ -201,24 +208,31 @@ class Swarm:
         self.state = saved.array("state", np.int8, (n,), 0, len(State) - 1)
         self.filled = saved.array("filled", bool, (len(self.world.targets),))
         self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0)
+        self.leader = saved.array("leader", np.int64, (n,), -1, n - 1)
         self.lattice = Lattice(self.world.size)
         holder = saved.array("holder", np.int64, self.lattice.holder.shape, WALL, n - 1)
+        queued = saved.array("queued", np.int64, self.lattice.queued.shape, FREE, n - 1)
         held = np.concatenate([self.cell + STEPS[self.direction] * k for k in (0, 1, 2)])
-        who = np.tile(np.arange(n), 3)
         reserved = np.concatenate([np.ones(n, bool), self.ahead >= 1, self.ahead >= 2])
         if (held[reserved] >= self.world.size).any() or (held[reserved] < 0).any():
             raise saved.error("cell", "puts a robot or its reservation outside the arena")
+        keys, who = self.lattice.key(held[reserved]), np.tile(np.arange(n), 3)[reserved]
+        lead = np.maximum(self.leader[who], 0)
+        following = (queued[keys] == who) & (self.leader[who] >= 0) & (holder[keys] == lead)
+        following &= self.lattice.key(self.cell[lead]) == keys
+        accounted = (holder >= 0).sum() + (queued >= 0).sum() == len(keys)
         walls = self.lattice.holder == WALL
         seeds = self.lattice.key(self.world.seeds)
-        mine = holder[self.lattice.key(held[reserved])] == who[reserved]
-        robots_where_they_are = mine.all() and (holder >= 0).sum() == reserved.sum()
         if (
-            not robots_where_they_are
+            not ((holder[keys] == who) | following).all()
+            or not accounted
+            or (self.leader >= 0).sum() != (queued >= 0).sum()
             or (holder[walls] != WALL).any()
             or (holder[seeds] != SEED).any()
         ):
             raise saved.error("holder", "disagrees with where the robots and seeds are")
         self.lattice.holder[:] = holder
+        self.lattice.queued[:] = queued
 
     def _restore_rng(self, saved: Snapshot) -> None:
         try:
@@ -262,31 +276,83 @@ class Swarm:
 
     def claim(self, robots: np.ndarray, directions: np.ndarray, origins: np.ndarray) -> np.ndarray:
         """Each robot asks for the cell one step in `direction` from the key `origin` (its own
-        cell, or the last one it reserved); free cells go to one claimant each, at random.
-        Return the winners, which hold their new cell from now on."""
+        cell, or the last one it reserved). Free cells, and cells whose robot is leaving them the
+        same way (the claimant then follows it, see `followable`), go to one claimant each, at
+        random. Return the winners, which hold (or are queued for) their new cell from now on."""
         claim = directions > 0
         robots, directions = robots[claim], directions[claim]
         keys = origins[claim] + self.lattice.offsets[directions]
-        wins = self.lattice.holder[keys] == FREE
+        holder = self.lattice.holder[keys]
+        follows = self.followable(keys, directions)
+        wins = (holder == FREE) | follows
         wins[wins] = resolve_claims(keys[wins], self.rng)
         winners = robots[wins]
-        self.lattice.holder[keys[wins]] = winners
+        queued = wins & follows
+        self.lattice.holder[keys[wins & ~queued]] = robots[wins & ~queued]
+        self.lattice.queued[keys[queued]] = robots[queued]
+        self.leader[robots[queued]] = holder[queued]
         self.ahead[winners] += 1
         self.direction[winners] = directions[wins]
         return winners
 
+    def followable(self, keys: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """Cells whose robot is already leaving them in `directions`, with nobody queued yet: a
+        robot coming the same way may follow it in, never closer than touching."""
+        holder = self.lattice.holder[keys]
+        robot = np.maximum(holder, 0)
+        leaving = (self.ahead[robot] > 0) & (self.direction[robot] == directions)
+        in_it = self.lattice.key(self.cell[robot]) == keys
+        return (holder >= 0) & leaving & in_it & (self.lattice.queued[keys] == FREE)
+
+    def enterable(self, keys: np.ndarray, groups: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """Cells a robot of `groups` coming in `directions` may claim: free or followable, and
+        not another group's target."""
+        passable = (self.lattice.holder[keys] == FREE) | self.followable(keys, directions)
+        return passable & self.lattice.allows(keys, groups)
+
     def _move(self) -> None:
         """Advance every robot along its reserved run; a robot reaching the next centre gives
-        up the cell behind it."""
-        self.distance += advance(self.offset, self.speed, self.ahead, self.params.limits)
+        up the cell behind it, to the robot queued for it if there is one."""
+        limits = self.params.limits
+        room = np.maximum(self.ahead - self.offset, 0.0)
+        step = step_sizes(self.speed, room, limits)
+        step[self.ahead == 0] = 0.0
+        self._behind_leaders(step, room)
+        self.offset += step
+        self.speed[:] = step
+        self.distance += step
         arrived = np.flatnonzero((self.ahead > 0) & (self.offset >= TOUCH))
-        self.lattice.holder[self.lattice.key(self.cell[arrived])] = FREE
+        self.leader[self.lattice.leave(self.lattice.key(self.cell[arrived]))] = -1
         self.cell[arrived] += STEPS[self.direction[arrived]]
         self.ahead[arrived] -= 1
         self.offset[arrived] -= 1.0
         stopped = arrived[self.ahead[arrived] == 0]
         self.offset[stopped] = 0.0
         self.speed[stopped] = 0.0
+
+    def _behind_leaders(self, step: np.ndarray, room: np.ndarray) -> None:
+        """Cap followers' steps so that each stays a whole cell behind its leader.
+
+        A follower may go as far as its leader's trailing edge after the leader's own step, and
+        plans to be able to stop there; a leader only moves on, so that never asks for harder
+        braking. Passes start from standing still and only raise steps, each computed against
+        leaders' steps of the pass before, so every pass is safe, and a train moves as one."""
+        followers = np.flatnonzero(self.leader >= 0)
+        if len(followers) == 0:
+            return
+        leaders = self.leader[followers]
+        along = STEPS[self.direction[followers]]
+        lead = ((self.cell[leaders] - self.cell[followers]) * along).sum(axis=1)
+        lead = lead + self.offset[leaders] - self.offset[followers] - 1.0
+        step[followers] = 0.0
+        for _ in range(FOLLOW_PASSES):
+            wall = np.maximum(lead + step[leaders], 0.0)
+            capped = step_sizes(
+                self.speed[followers], np.minimum(room[followers], wall), self.params.limits
+            )
+            if np.array_equal(capped, step[followers]):
+                return
+            step[followers] = capped
 
     def _audit(self) -> None:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""
