@@ -25,30 +25,37 @@ def overlaps(
     (seed ``s`` is number ``len(cell) + s``).
 
     A square covers its cell, and the next one too while it is between the two; squares that
-    overlap share a cell, so only robots sharing one need the exact test.
+    overlap share a cell, so only squares sharing one need the exact test. Two squares may
+    share a cell without overlapping (one leaving it as the other comes in behind it), but
+    never three, so every pair in a shared cell is tested.
     """
-    suspects = _sharing_a_cell(cell, direction, offset, seeds, size)
-    if len(suspects) == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    everything = np.concatenate([positions(cell, direction, offset), seeds + 0.5])
-    i, j = overlapping_pairs(everything[suspects])
-    return suspects[i], suspects[j]
-
-
-def _sharing_a_cell(
-    cell: np.ndarray,
-    direction: np.ndarray,
-    offset: np.ndarray,
-    seeds: np.ndarray,
-    size: tuple[int, int],
-) -> np.ndarray:
-    """Robots (then seeds) whose covered cells include one that another square covers too."""
     between = np.flatnonzero(offset > 0)
     covered = np.concatenate([cell, cell[between] + STEPS[direction[between]], seeds])
     owners = np.concatenate([np.arange(len(cell)), between, len(cell) + np.arange(len(seeds))])
     keys = (covered[:, 0] + 1) * (size[1] + 2) + covered[:, 1] + 1
     shared = np.bincount(keys, minlength=(size[0] + 2) * (size[1] + 2))[keys] > 1
-    return np.unique(owners[shared])
+    if not shared.any():
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    i, j = _pairs_in_cells(keys[shared], owners[shared])
+    everything_at = np.concatenate([positions(cell, direction, offset), seeds + 0.5])
+    touching_or_apart = np.abs(everything_at[i] - everything_at[j]).max(axis=1) >= TOUCH
+    return i[~touching_or_apart], j[~touching_or_apart]
+
+
+def _pairs_in_cells(keys: np.ndarray, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of distinct owners that share a key (a cell)."""
+    order = np.argsort(keys, kind="stable")
+    keys, owners = keys[order], owners[order]
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    sizes = np.diff(np.r_[starts, len(keys)])
+    found_i, found_j = [], []
+    for gap in range(1, int(sizes.max())):  # pairs a gap apart within each run
+        first = np.flatnonzero(np.r_[keys[gap:] == keys[:-gap], np.zeros(gap, dtype=bool)])
+        found_i.append(owners[first])
+        found_j.append(owners[first + gap])
+    i, j = np.concatenate(found_i), np.concatenate(found_j)
+    distinct = i != j
+    return i[distinct], j[distinct]
 
 
 def overlapping_pairs(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

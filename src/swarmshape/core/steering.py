@@ -24,7 +24,7 @@ from swarmshape.core.motion import STEPS, Motion
 from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
 from swarmshape.core.snapshot import Snapshot, decode_attributes, encode_attributes, prefixed
 from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
-from swarmshape.core.tswap import rotate_rings, settled_swaps
+from swarmshape.core.tswap import rotate_rings, settled_swaps, shortening_swaps
 
 if TYPE_CHECKING:
     from swarmshape.core.messages import Message
@@ -47,6 +47,9 @@ class Strategy:
     def on_start(self, swarm: SwarmView) -> None:
         """Hand out the first targets, by ``swarm.assign`` or ``swarm.send``."""
         raise NotImplementedError(f"strategy {self.name!r} must define on_start(swarm)")
+
+    def on_step(self, swarm: SwarmView) -> None:
+        """A step begins (before robots decide where to go). Default: nothing to do."""
 
     def on_settled(self, swarm: SwarmView, robots: np.ndarray) -> None:
         """`robots` reached their targets this step. Default: nothing to do."""
@@ -269,6 +272,7 @@ class Steering:
 
     def decide(self) -> None:
         """Every robot that wants a next cell claims it through the swarm."""
+        self.strategy.on_step(self.view)
         self._deliver_messages()
         starters, cruisers, stuck = self._who_moves()
         self._plan(starters[self.routed[starters]])
@@ -405,6 +409,14 @@ class Steering:
         # Their waiting time keeps counting: two movers that steered different ways round an
         # obstacle could trade targets back and forth for ever, and this way they sidestep.
         self.planner.forget(receivers)
+        rotated = np.zeros(len(self.target), dtype=bool)
+        rotated[receivers] = True
+        tangled = waits_for_mover & ~rotated[blocked] & ~rotated[robot]
+        a, b = shortening_swaps(
+            blocked[tangled], robot[tangled], swarm.cell, swarm.world.targets[self.target]
+        )
+        self.target[a], self.target[b] = self.target[b], self.target[a].copy()
+        self.planner.forget(np.concatenate([a, b]))
         swap = settled & same_group
         self._swap_with_settled(*settled_swaps(blocked[swap], robot[swap]))
         fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group)

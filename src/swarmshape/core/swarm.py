@@ -345,14 +345,19 @@ class Swarm:
         lead = ((self.cell[leaders] - self.cell[followers]) * along).sum(axis=1)
         lead = lead + self.offset[leaders] - self.offset[followers] - 1.0
         step[followers] = 0.0
+        active = np.arange(len(followers))
         for _ in range(FOLLOW_PASSES):
-            wall = np.maximum(lead + step[leaders], 0.0)
-            capped = step_sizes(
-                self.speed[followers], np.minimum(room[followers], wall), self.params.limits
-            )
-            if np.array_equal(capped, step[followers]):
+            f = followers[active]
+            wall = np.maximum(lead[active] + step[leaders[active]], 0.0)
+            capped = step_sizes(self.speed[f], np.minimum(room[f], wall), self.params.limits)
+            raised = capped > step[f]
+            step[f] = capped
+            # only followers of robots that just went further can go further themselves
+            moved_on = np.zeros(len(step), dtype=bool)
+            moved_on[f[raised]] = True
+            active = np.flatnonzero(moved_on[leaders])
+            if len(active) == 0:
                 return
-            step[followers] = capped
 
     def _audit(self) -> None:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""

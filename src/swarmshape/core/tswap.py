@@ -50,3 +50,23 @@ def settled_swaps(movers: np.ndarray, settled: np.ndarray) -> tuple[np.ndarray, 
     blocked by it, so no robot takes part in two swaps in one step."""
     _, first = np.unique(settled, return_index=True)
     return movers[first], settled[first]
+
+
+def shortening_swaps(
+    waiting: np.ndarray, waited_for: np.ndarray, cell: np.ndarray, goal: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(waiting, waited_for)`` pairs of neighbours that should trade goals: those where
+    trading shortens their summed lattice distance (local task swapping, Wang and Rubenstein,
+    IEEE T-RO 2020). Crossing lanes tangle into long chains of robots each waiting on the next;
+    a trade usually sends both the way that is free. No robot is in two pairs."""
+    distance = np.abs(cell[waiting] - goal[waiting]).sum(1) + np.abs(
+        cell[waited_for] - goal[waited_for]
+    ).sum(1)
+    traded = np.abs(cell[waiting] - goal[waited_for]).sum(1) + np.abs(
+        cell[waited_for] - goal[waiting]
+    ).sum(1)
+    pairs = np.flatnonzero(traded < distance)
+    everyone = np.concatenate([waiting[pairs], waited_for[pairs]])
+    once = np.bincount(everyone, minlength=len(cell))[everyone] == 1
+    alone = once[: len(pairs)] & once[len(pairs) :]
+    return waiting[pairs[alone]], waited_for[pairs[alone]]

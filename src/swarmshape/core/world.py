@@ -149,6 +149,20 @@ class World:
         grid[cells[:, 0], cells[:, 1]] = True
         return grid
 
+    def depth(self) -> np.ndarray:
+        """For each target, how many cells it lies inside its group's shape: the lattice
+        distance to the nearest cell that is not the shape's (1 on the rim)."""
+        inside = self.mask(self.targets)
+        owner = np.full(self.size, -1)
+        owner[self.targets[:, 0], self.targets[:, 1]] = self.target_group
+        depth = np.zeros(len(self.targets), dtype=np.int64)
+        for group in range(len(self.groups)):
+            mine = inside & (owner == group)
+            field = ndimage.distance_transform_cdt(np.pad(mine, 1), metric="taxicab")[1:-1, 1:-1]
+            cells = self.targets[self.target_group == group]
+            depth[self.target_group == group] = field[cells[:, 0], cells[:, 1]]
+        return depth
+
     def outside(self) -> np.ndarray:
         """Free cells connected to the arena border: where agents can come from."""
         free = ~(self.mask(self.targets) | self.mask(self.seeds))
