@@ -55,17 +55,21 @@ def settled_swaps(movers: np.ndarray, settled: np.ndarray) -> tuple[np.ndarray, 
 def shortening_swaps(
     waiting: np.ndarray, waited_for: np.ndarray, cell: np.ndarray, goal: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(waiting, waited_for)`` pairs of neighbours that should trade goals: those where
-    trading shortens their summed lattice distance (local task swapping, Wang and Rubenstein,
-    IEEE T-RO 2020). Crossing lanes tangle into long chains of robots each waiting on the next;
-    a trade usually sends both the way that is free. No robot is in two pairs."""
-    distance = np.abs(cell[waiting] - goal[waiting]).sum(1) + np.abs(
-        cell[waited_for] - goal[waited_for]
-    ).sum(1)
-    traded = np.abs(cell[waiting] - goal[waited_for]).sum(1) + np.abs(
-        cell[waited_for] - goal[waiting]
-    ).sum(1)
-    pairs = np.flatnonzero(traded < distance)
+    """``(waiting, waited_for)`` pairs of neighbours that should trade goals (local task
+    swapping, Wang and Rubenstein, IEEE T-RO 2020): those where trading shortens their summed
+    lattice distance, or keeps it and brings the waiting robot nearer its goal. Crossing lanes
+    tangle into long chains of robots each waiting on the next, and crossing paths in lattice
+    distance often tie; a trade usually sends both the way that is free. No robot is in two
+    pairs."""
+
+    def apart(robots: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        return np.abs(cell[robots] - goals).sum(axis=1)
+
+    own = apart(waiting, goal[waiting])
+    taken = apart(waiting, goal[waited_for])
+    now = own + apart(waited_for, goal[waited_for])
+    traded = taken + apart(waited_for, goal[waiting])
+    pairs = np.flatnonzero((traded < now) | ((traded == now) & (taken < own)))
     everyone = np.concatenate([waiting[pairs], waited_for[pairs]])
     once = np.bincount(everyone, minlength=len(cell))[everyone] == 1
     alone = once[: len(pairs)] & once[len(pairs) :]
