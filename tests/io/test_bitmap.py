@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -172,3 +174,19 @@ def test_fit_finds_the_largest_shape_the_robots_can_fill(tmp_path):
         assert grid.sum() <= robots
         side = grid.shape[0]
         assert (side + 1) ** 2 > robots, "one cell more across would not fit"
+
+
+@pytest.mark.parametrize("cells", [5001, 10**11])
+def test_cells_beyond_the_largest_arena_are_refused_before_the_grid_is_made(tmp_path, cells):
+    """Found by the fuzz: --cells 99999999999 asked numpy for 47 GB (an internal error), and
+    --cells 100000 took 5.6 GB and 9 s to say there were too many robots."""
+    path = write(tmp_path / "square.png", np.zeros((6, 6)))
+    tracemalloc.start()
+    try:
+        with pytest.raises(BitmapError, match=f"--cells {cells:,} makes a grid of"):
+            load_grid(path, cells=cells)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 10_000_000
+    assert load_grid(path, cells=5000).shape == (5000, 5000)
