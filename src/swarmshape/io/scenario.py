@@ -107,6 +107,8 @@ def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ScenarioError(f"{path}: not valid TOML ({error})") from None
+    except RecursionError:  # tomllib recurses once per level of nesting
+        raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
     except OSError as error:
         raise ScenarioError(f"{path}: cannot read it ({error.strerror})") from None
     where = _Where(path)
