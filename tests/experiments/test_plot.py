@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 import re
+import threading
 
 import matplotlib
 import pytest
@@ -105,6 +107,20 @@ def test_a_missing_file_or_a_folder_is_one_clear_line(tmp_path, capsys, target, 
     assert main(["plot", str(tmp_path / target), "--out", str(tmp_path / "plots")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
+
+
+def test_a_pipe_is_refused_at_once_instead_of_hanging(tmp_path, capsys):
+    """Found by the fuzz: plot waited for a writer to the pipe, for good."""
+    pipe = tmp_path / "results.csv"
+    os.mkfifo(pipe)
+    outcome = []
+    command = ["plot", str(pipe), "--out", str(tmp_path / "plots")]
+    thread = threading.Thread(target=lambda: outcome.append(main(command)), daemon=True)
+    thread.start()
+    thread.join(5)
+    assert outcome == [2]
+    assert "results.csv: is not a regular file" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.csv"]
 
 
 def test_plots_into_a_file_are_one_clear_line(results, tmp_path, capsys):
