@@ -339,6 +339,12 @@ def list_strategies(args: argparse.Namespace) -> int:
 def run_check(args: argparse.Namespace) -> int:
     from swarmshape.check import check_strategy
 
+    if args.runs < 1:
+        raise InputError(f"--runs must be at least 1, got {args.runs}")
+    if args.max_steps < 0:
+        raise InputError(f"--max-steps must be 0 or more, got {args.max_steps}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a whole number of 0 or more, got {args.seed}")
     report = check_strategy(args.strategy, runs=args.runs, seed=args.seed, max_steps=args.max_steps)
     print(report.text())
     return 0 if report.clean else NOT_FORMED
