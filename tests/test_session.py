@@ -116,6 +116,16 @@ def test_preview_prints_the_shape_and_runs_nothing(tmp_path, capsys):
     assert not (tmp_path / "m.json").exists()
 
 
+def test_preview_of_a_saved_run_shows_its_shape_not_the_default_one(tmp_path, capsys):
+    """Found while fuzzing: --load-state s.state --preview printed the bundled horseshoe."""
+    state = tmp_path / "s.state"
+    run(str(SHAPES / "line.png"), "--headless", "--max-steps", "5", "--save-state", str(state))
+    capsys.readouterr()
+    assert main(["--load-state", str(state), "--preview"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("line: 16 cells") and len(lines) == 2
+
+
 def test_fit_agents_sizes_the_shape_to_the_robots(tmp_path):
     out = tmp_path / "m.json"
     assert main([HORSESHOE, "--agents", "400", "--fit", "agents", "--preview"]) == 0

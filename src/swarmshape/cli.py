@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from swarmshape.errors import InputError
-from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world
+from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume
 from swarmshape.session import Outputs, Session, preview_text
 from swarmshape.strategies.fill_order import ORDERS
 
@@ -267,7 +267,11 @@ def run_session(args: argparse.Namespace) -> int:
     else:
         config = configure(args.path, **given)
     if args.preview:
-        print(preview_text(load_world(config)))
+        if args.load_state is not None:  # the saved run's shape, not the default one
+            world = resume(args.load_state, args.strategy)[1].world
+        else:
+            world = load_world(config)
+        print(preview_text(world))
         return 0
     outputs = Outputs(
         metrics=getattr(args, "metrics", None),
