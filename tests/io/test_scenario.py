@@ -37,6 +37,8 @@ def write(tmp_path, text):
         ("[[groups]]\nshape = 'line.png'\nagents = 'many'\n", "agents must be int"),
         ("[[groups]]\nshape = 'line.png'\nagents = true\n", "agents must be int"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'blurple'\n", "not a colour"),
+        ("[[groups]]\nshape = 'line.png'\ncolour = 'rgb(999,999,999)'\n", "not a colour"),
+        ("[[groups]]\nshape = 'line.png'\ncolour = 'hsl(999, 999%, 999%)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\npose = {x = 1, z = 2}\n", "unknown key 'z'"),
         ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "two integers"),
         ("max_speed = 'fast'\n[[groups]]\nshape = 'line.png'\n", "max_speed must be"),

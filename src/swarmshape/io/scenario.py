@@ -171,7 +171,11 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
 
 
 def parse_colour(colour: str) -> tuple[int, int, int]:
+    """Red, green and blue, 0 to 255, of a colour name or specifier; ValueError for anything
+    else, including what Pillow reads beyond that range (``rgb(999,0,0)``, ``hsl(999,...)``)."""
     red, green, blue = ImageColor.getrgb(colour)[:3]
+    if not all(0 <= channel <= 255 for channel in (red, green, blue)):
+        raise ValueError(f"{colour!r} is beyond 0 to 255")
     return red, green, blue
 
 
