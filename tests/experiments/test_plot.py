@@ -123,6 +123,14 @@ def test_a_pipe_is_refused_at_once_instead_of_hanging(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.csv"]
 
 
+@pytest.mark.parametrize("out", ["f" * 300, "f" * 300 + "/plots"])
+def test_plots_into_a_folder_of_a_too_long_name_are_one_clear_line(results, tmp_path, capsys, out):
+    """Found by the fuzz: asking whether the plots existed there raised ENAMETOOLONG."""
+    assert main(["plot", str(results), "--out", str(tmp_path / out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot write the plots there (File name too long)" in err[0], err
+
+
 def test_plots_into_a_file_are_one_clear_line(results, tmp_path, capsys):
     (tmp_path / "taken").write_text("mine")
     assert main(["plot", str(results), "--out", str(tmp_path / "taken")]) == 2

@@ -162,6 +162,12 @@ def _refusal(path: Path) -> str:
     return "read"
 
 
+def test_a_sweep_file_of_a_too_long_name_is_not_there(tmp_path):
+    """Found by the fuzz: looking the name up raised ENAMETOOLONG, an internal error."""
+    with pytest.raises(InputError, match="no such sweep file"):
+        read_sweep(tmp_path / ("s" * 300 + ".toml"))
+
+
 def test_a_sweep_file_nested_too_deeply_is_one_clear_error(tmp_path):
     path = sweep_file(tmp_path, LINE + f"agents = {'[' * 3000}{']' * 3000}\n")
     with pytest.raises(InputError, match="nested too deeply to be a sweep file"):

@@ -132,7 +132,7 @@ def read_sweep(path: Path) -> Sweep:
 def _read_toml(path: Path) -> dict[str, Any]:
     """The sweep file's table. Only a regular file is read: a pipe would hang the sweep, and
     a device such as /dev/zero fill the memory."""
-    if not path.exists():
+    if not os.path.exists(path):  # False, not an error, for a name too long to look up
         raise InputError(f"{path}: no such sweep file")
     readable_file(path, "a sweep .toml file")
     try:
