@@ -168,7 +168,7 @@ SIZE_NOISE = ["0x0", "1x1", "10x-3", "99999x99999", "25000001x1", "axb", "x", ""
 STRATEGIES = ["optimal", "greedy", "random", "paper", "mine.py:Mine", "nope", "", "a:", ":", ":B",
               ".x:Y", "os:path", "swarmshape.core.motion:Limits", "swarmshape:Strategy",
               "missing.py:X", "notes.txt:X", "sub:X", "mine.py:", "mine.py:Optimal",
-              "x" * 300]  # fmt: skip
+              "x" * 300, "x" * 300 + ".py:X"]  # fmt: skip
 ORDERS = ["outward", "left-to-right", "random", "", "inward", "OUTWARD"]
 
 
@@ -469,8 +469,9 @@ INTERESTING = [0, 1, -1, 2, 3, 90, 45, 4095, 4096, 1_000_001, 2**31, 2**63 - 1, 
                10**30, 0.0, -0.0, 0.5, 1.5, 1e-320, 1e308, float("inf"), float("-inf"),
                float("nan"), True, False, "", "x", "0", "optimal", "paper", "mine.py:Mine",
                "shape.png", "sub/dot.png", "scenario.toml", "../shape.png", "/dev/null", "sub",
-               ".", "é", "a" * 300, "#zzz", "red", [], [1], [1, 2], [1, 2, 3], ["a"], [[1, 2]],
-               {}, {"x": 1}]  # fmt: skip
+               ".", "é", "a" * 300, "#zzz", "red", "rgb(999,999,999)", "hsl(999, 999%, 999%)",
+               "a,b", 'a"b', "a\nb", [], [1], [1, 2], [1, 2, 3], ["a"], [[1, 2]], {},
+               {"x": 1}]  # fmt: skip
 """Values a mutation puts where another was: other types, edges, out of range."""
 
 
@@ -1250,6 +1251,8 @@ class Named:
             if args.frames is not None:
                 self.folders.add(self._relative(args.frames))
         elif command == "sweep":
+            if args.out is None and not args.file.name:  # no file, so no results beside it
+                return
             out = args.out or args.file.with_suffix(".csv")
             self._file(out)
             lock = Path(os.path.realpath(case.folder / out))
@@ -1399,6 +1402,8 @@ KNOWN = (
     Known("strategies/__init__.py", "ValueError: Empty module name", ("check", ":B")),
     Known("strategies/__init__.py", "TypeError: the 'package' argument is required",
           ("shape.png", "--strategy", ".x:Y", "--headless")),
+    Known("strategies/__init__.py", "OSError: [Errno 36] File name too long",
+          ("shape.png", "--strategy", "x" * 300 + ".py:X", "--headless")),
     Known("check.py", "AttributeError: type object 'Strategy' has no attribute 'name'",
           ("check", "swarmshape:Strategy")),
     Known("core/steering.py", "AttributeError: 'Strategy' object has no attribute 'name'",
