@@ -167,3 +167,18 @@ def test_several_shapes_are_told_apart(tmp_path, monkeypatch):
         "small-square.png, optimal, max_speed 0.5, 36 robots (2 runs)",
         "small-square.png, optimal, max_speed 1.0, 36 robots (2 runs)",
     ]
+
+
+def test_a_dollar_in_a_setting_is_drawn_as_it_is(results, tmp_path, monkeypatch):
+    """A value with "$" signs, e.g. a strategy named $\\frac{1}{0$, was read as a formula by
+    matplotlib, whose ParseSyntaxException was an internal error (and left an empty plots
+    folder behind)."""
+    rows = rows_of(results)
+    column = rows[0].index("config.strategy")
+    for row in rows[1:]:
+        row[column] = row[column].replace("optimal", r"$\frac{1}{0$")
+    (tmp_path / "dollar.csv").write_text(csv_text(rows))
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
+    plot_results(tmp_path / "dollar.csv", tmp_path / "plots", ("svg",))
+    labels = legend(tmp_path / "plots" / "coverage.svg")
+    assert r"$\frac{1}{0$, 16 robots (2 runs)" in labels

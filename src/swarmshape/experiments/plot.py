@@ -164,7 +164,7 @@ def _labels(settings: list[Setting]) -> list[str]:
         parts.append(values["strategy"])
         parts += [f"{name} {value}" for name, value in setting
                   if name in differ - {"shape", "strategy"}]  # fmt: skip
-        labels.append(", ".join(parts))
+        labels.append(", ".join(parts).replace("$", r"\$"))  # a "$" starts no formula here
     return labels
 
 
