@@ -286,7 +286,8 @@ def _lock(path: Path) -> Iterator[None]:
     except ImportError:  # Windows
         message = "sweeps need Linux or macOS: their results file is locked with flock"
         raise InputError(message) from None
-    lock = path.resolve().with_name(f".{path.name}.lock")
+    real = path.resolve()  # one lock for the file, whichever link names it
+    lock = real.with_name(f".{real.name}.lock")
     while True:
         try:
             handle = lock.open("a")
