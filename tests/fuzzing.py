@@ -470,7 +470,7 @@ INTERESTING = [0, 1, -1, 2, 3, 90, 45, 4095, 4096, 1_000_001, 2**31, 2**63 - 1, 
                float("nan"), True, False, "", "x", "0", "optimal", "paper", "mine.py:Mine",
                "shape.png", "sub/dot.png", "scenario.toml", "../shape.png", "/dev/null", "sub",
                ".", "é", "a" * 300, "#zzz", "red", "rgb(999,999,999)", "hsl(999, 999%, 999%)",
-               "a,b", 'a"b', "a\nb", [], [1], [1, 2], [1, 2, 3], ["a"], [[1, 2]], {},
+               "a,b", 'a"b', "a\nb", "$x$", [], [1], [1, 2], [1, 2, 3], ["a"], [[1, 2]], {},
                {"x": 1}]  # fmt: skip
 """Values a mutation puts where another was: other types, edges, out of range."""
 
@@ -751,7 +751,8 @@ def mutated_toml(pick: Pick, text: str) -> bytes:
 
 CSV_CELLS = ["", "-1", "0", "1e3", "99999999999999999999", "nan", "x", "\u0663", " 4", "1.0",
              "2**3", "[]", "[nan]", "[1e999]", '{"a": 1}', "[" * 5000 + "]" * 5000, "null", "true",
-             "[0.5, 1]", "[-1]", "[" + ", ".join(["0.5"] * 2000) + "]"]  # fmt: skip
+             "[0.5, 1]", "[-1]", "[" + ", ".join(["0.5"] * 2000) + "]", "$\\frac{1}{0$",
+             "a$b$c"]  # fmt: skip
 
 
 def mutated_csv(pick: Pick, text: str) -> bytes:
@@ -1255,8 +1256,8 @@ class Named:
                 return
             out = args.out or args.file.with_suffix(".csv")
             self._file(out)
-            lock = Path(os.path.realpath(case.folder / out))
-            self._file(lock.with_name(f".{Path(out).name}.lock"))
+            real = Path(os.path.realpath(case.folder / out))
+            self._file(real.with_name(f".{real.name}.lock"))
             with contextlib.suppress(OSError):  # not there, or a name too long
                 existing = os.path.join(self.root, out)
                 if not args.force and stat.S_ISREG(os.stat(existing).st_mode):
