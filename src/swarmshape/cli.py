@@ -13,6 +13,7 @@ import sys
 import tempfile
 import traceback
 import warnings
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
@@ -222,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
         argv.insert(0, "run")
     args = build_parser().parse_args(argv)
-    warnings.showwarning = _warning_line
+    warnings.showwarning = _first_warning()
     try:
         return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
@@ -239,9 +240,19 @@ def main(argv: list[str] | None = None) -> int:
         return 1
 
 
-def _warning_line(message: Warning | str, category: type, *_: object, **__: object) -> None:
-    """A warning is one line on stderr, like an error, without a source line below it."""
-    print(f"swarmshape: warning: {message}", file=sys.stderr)
+def _first_warning() -> Callable[..., None]:
+    """How a command shows warnings: as one line on stderr, like an error, without a source
+    line below it; and only its first, which names the option that helps (a picture squeezed
+    into one cell also has too many robots for it: raising --cells cures both)."""
+    shown = False
+
+    def show(message: Warning | str, category: type, *_: object, **__: object) -> None:
+        nonlocal shown
+        if not shown:
+            print(f"swarmshape: warning: {message}", file=sys.stderr)
+            shown = True
+
+    return show
 
 
 def _crash_log() -> str:
