@@ -190,6 +190,10 @@ def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
         ) from None
     except DECODING_ERRORS as error:
         raise BitmapError(f"{path}: cannot read image ({_reason(error)})") from None
+    except MemoryError:  # a damaged length, read at once: a PNG chunk claiming 4 GB
+        raise BitmapError(
+            f"{path}: cannot read image (it asks for more memory than there is; damaged?)"
+        ) from None
 
 
 def _reason(error: BaseException) -> str:
