@@ -35,7 +35,7 @@ class Parser(argparse.ArgumentParser):
     """argparse, but a mistake is one line on stderr like every other bad input."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"swarmshape: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"swarmshape: error: {_one_line(message)} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -227,7 +227,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
-        print(f"swarmshape: error: {error}", file=sys.stderr)
+        print(f"swarmshape: error: {_one_line(str(error))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("swarmshape: interrupted", file=sys.stderr)
@@ -249,10 +249,16 @@ def _first_warning() -> Callable[..., None]:
     def show(message: Warning | str, category: type, *_: object, **__: object) -> None:
         nonlocal shown
         if not shown:
-            print(f"swarmshape: warning: {message}", file=sys.stderr)
+            print(f"swarmshape: warning: {_one_line(str(message))}", file=sys.stderr)
             shown = True
 
     return show
+
+
+def _one_line(text: str) -> str:
+    """`text` with line breaks and other unprintable characters written as escapes (a file
+    named "a\\nb" is shown so): a message is one line, whatever names it quotes."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
 
 
 def _crash_log() -> str:
