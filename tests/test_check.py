@@ -50,3 +50,20 @@ def test_the_command_reports_and_sets_its_exit_status(capsys):
     assert "no problems found" in capsys.readouterr().out
     assert main(["check", "tests.test_check:NeverStarts", "--runs", "1", "--max-steps", "9"]) == 3
     assert "not formed" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--runs", "0"], "--runs must be at least 1, got 0"),
+        (["--runs", "-3"], "--runs must be at least 1, got -3"),
+        (["--max-steps", "-5"], "--max-steps must be 0 or more, got -5"),
+        (["--seed", "-1"], "--seed must be a whole number of 0 or more, got -1"),
+    ],
+)
+def test_numbers_a_check_cannot_use_are_one_clear_line(capsys, option, message):
+    """Found by the fuzz: --runs -3 reported '-3 random shapes ... no problems found' (exit
+    0), --max-steps -5 'not formed after -5 steps', and --seed -1 was an internal error."""
+    assert main(["check", "optimal", "--runs", "1", *option]) == 2
+    captured = capsys.readouterr()
+    assert captured.err == f"swarmshape: error: {message}\n" and captured.out == ""

@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -109,3 +110,22 @@ def test_bad_input_is_one_line_on_stderr_and_exit_code_2(tmp_path, case):
     assert len(lines) == 1 and lines[0].startswith("swarmshape: error: ")
     assert message in lines[0]
     assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "shown"),
+    [
+        (["sweep", "{dir}/sweep.toml"], "/a\\nb: no such file"),
+        (["{dir}/a\nb.png", "--headless"], "a\\nb.png: no such file"),
+        ([str(SHAPES / "line.png"), "x\ny", "--headless"], "unrecognized arguments: x\\ny"),
+        (["{dir}/c\x1b[31m.png", "--headless"], "c\\x1b[31m.png: no such file"),
+    ],
+)
+def test_a_name_with_a_line_break_does_not_split_the_error_line(tmp_path, capsys, args, shown):
+    """Found by the long fuzz (seed 11, case 745): a sweep file naming the shape 'a\\nb' made
+    a two-line error; and an escape sequence in a name went to the terminal as it was."""
+    (tmp_path / "sweep.toml").write_text('shapes = ["a\\nb"]\nstrategies = ["optimal"]\n')
+    with pytest.raises(SystemExit) if "x\ny" in args else contextlib.nullcontext():
+        assert main([arg.replace("{dir}", str(tmp_path)) for arg in args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and shown in err and "\x1b" not in err

@@ -6,6 +6,7 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from PIL import Image
 
@@ -116,6 +117,16 @@ def test_preview_prints_the_shape_and_runs_nothing(tmp_path, capsys):
     assert not (tmp_path / "m.json").exists()
 
 
+def test_preview_of_a_saved_run_shows_its_shape_not_the_default_one(tmp_path, capsys):
+    """Found while fuzzing: --load-state s.state --preview printed the bundled horseshoe."""
+    state = tmp_path / "s.state"
+    run(str(SHAPES / "line.png"), "--headless", "--max-steps", "5", "--save-state", str(state))
+    capsys.readouterr()
+    assert main(["--load-state", str(state), "--preview"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("line: 16 cells") and len(lines) == 2
+
+
 def test_fit_agents_sizes_the_shape_to_the_robots(tmp_path):
     out = tmp_path / "m.json"
     assert main([HORSESHOE, "--agents", "400", "--fit", "agents", "--preview"]) == 0
@@ -129,6 +140,18 @@ def test_many_more_robots_than_cells_is_a_warning_naming_fit(capsys):
     assert main([HORSESHOE, "--agents", "400", "--preview"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--fit agents" in err[0] and err[0].startswith("swarmshape: warning")
+
+
+def test_a_run_with_two_warnings_shows_the_first_in_one_line(tmp_path, capsys):
+    """Found by the fuzz: --cells 1 --agents 5 printed two warning lines (the picture became
+    one cell; five robots for it), where a run says at most one."""
+    picture = np.full((8, 8), 255, dtype=np.uint8)
+    picture[2:4, 2:4] = 0
+    Image.fromarray(picture).save(tmp_path / "dot.png")
+    assert main([str(tmp_path / "dot.png"), "--cells", "1", "--agents", "5", "--preview"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["swarmshape: warning: " + f"{tmp_path / 'dot.png'}: the whole picture became "
+                   "1 cell; raise --cells"]  # fmt: skip
 
 
 def test_progress_off_a_terminal_is_a_line_every_few_seconds(monkeypatch, capsys):

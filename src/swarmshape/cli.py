@@ -13,12 +13,13 @@ import sys
 import tempfile
 import traceback
 import warnings
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
 from swarmshape.errors import InputError
-from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world
+from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume
 from swarmshape.session import Outputs, Session, preview_text
 from swarmshape.strategies.fill_order import ORDERS
 
@@ -34,7 +35,7 @@ class Parser(argparse.ArgumentParser):
     """argparse, but a mistake is one line on stderr like every other bad input."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"swarmshape: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"swarmshape: error: {_one_line(message)} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -222,11 +223,11 @@ def main(argv: list[str] | None = None) -> int:
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
         argv.insert(0, "run")
     args = build_parser().parse_args(argv)
-    warnings.showwarning = _warning_line
+    warnings.showwarning = _first_warning()
     try:
         return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
-        print(f"swarmshape: error: {error}", file=sys.stderr)
+        print(f"swarmshape: error: {_one_line(str(error))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("swarmshape: interrupted", file=sys.stderr)
@@ -239,9 +240,25 @@ def main(argv: list[str] | None = None) -> int:
         return 1
 
 
-def _warning_line(message: Warning | str, category: type, *_: object, **__: object) -> None:
-    """A warning is one line on stderr, like an error, without a source line below it."""
-    print(f"swarmshape: warning: {message}", file=sys.stderr)
+def _first_warning() -> Callable[..., None]:
+    """How a command shows warnings: as one line on stderr, like an error, without a source
+    line below it; and only its first, which names the option that helps (a picture squeezed
+    into one cell also has too many robots for it: raising --cells cures both)."""
+    shown = False
+
+    def show(message: Warning | str, category: type, *_: object, **__: object) -> None:
+        nonlocal shown
+        if not shown:
+            print(f"swarmshape: warning: {_one_line(str(message))}", file=sys.stderr)
+            shown = True
+
+    return show
+
+
+def _one_line(text: str) -> str:
+    """`text` with line breaks and other unprintable characters written as escapes (a file
+    named "a\\nb" is shown so): a message is one line, whatever names it quotes."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in text)
 
 
 def _crash_log() -> str:
@@ -267,7 +284,11 @@ def run_session(args: argparse.Namespace) -> int:
     else:
         config = configure(args.path, **given)
     if args.preview:
-        print(preview_text(load_world(config)))
+        if args.load_state is not None:  # the saved run's shape, not the default one
+            world = resume(args.load_state, args.strategy)[1].world
+        else:
+            world = load_world(config)
+        print(preview_text(world))
         return 0
     outputs = Outputs(
         metrics=getattr(args, "metrics", None),
@@ -339,6 +360,12 @@ def list_strategies(args: argparse.Namespace) -> int:
 def run_check(args: argparse.Namespace) -> int:
     from swarmshape.check import check_strategy
 
+    if args.runs < 1:
+        raise InputError(f"--runs must be at least 1, got {args.runs}")
+    if args.max_steps < 0:
+        raise InputError(f"--max-steps must be 0 or more, got {args.max_steps}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a whole number of 0 or more, got {args.seed}")
     report = check_strategy(args.strategy, runs=args.runs, seed=args.seed, max_steps=args.max_steps)
     print(report.text())
     return 0 if report.clean else NOT_FORMED

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 import re
+import threading
 
 import matplotlib
 import pytest
@@ -107,6 +109,28 @@ def test_a_missing_file_or_a_folder_is_one_clear_line(tmp_path, capsys, target, 
     assert len(err) == 1 and message in err[0], err
 
 
+def test_a_pipe_is_refused_at_once_instead_of_hanging(tmp_path, capsys):
+    """Found by the fuzz: plot waited for a writer to the pipe, for good."""
+    pipe = tmp_path / "results.csv"
+    os.mkfifo(pipe)
+    outcome = []
+    command = ["plot", str(pipe), "--out", str(tmp_path / "plots")]
+    thread = threading.Thread(target=lambda: outcome.append(main(command)), daemon=True)
+    thread.start()
+    thread.join(5)
+    assert outcome == [2]
+    assert "results.csv: is not a regular file" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.csv"]
+
+
+@pytest.mark.parametrize("out", ["f" * 300, "f" * 300 + "/plots"])
+def test_plots_into_a_folder_of_a_too_long_name_are_one_clear_line(results, tmp_path, capsys, out):
+    """Found by the fuzz: asking whether the plots existed there raised ENAMETOOLONG."""
+    assert main(["plot", str(results), "--out", str(tmp_path / out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot write the plots there (File name too long)" in err[0], err
+
+
 def test_plots_into_a_file_are_one_clear_line(results, tmp_path, capsys):
     (tmp_path / "taken").write_text("mine")
     assert main(["plot", str(results), "--out", str(tmp_path / "taken")]) == 2
@@ -143,3 +167,18 @@ def test_several_shapes_are_told_apart(tmp_path, monkeypatch):
         "small-square.png, optimal, max_speed 0.5, 36 robots (2 runs)",
         "small-square.png, optimal, max_speed 1.0, 36 robots (2 runs)",
     ]
+
+
+def test_a_dollar_in_a_setting_is_drawn_as_it_is(results, tmp_path, monkeypatch):
+    """A value with "$" signs, e.g. a strategy named $\\frac{1}{0$, was read as a formula by
+    matplotlib, whose ParseSyntaxException was an internal error (and left an empty plots
+    folder behind)."""
+    rows = rows_of(results)
+    column = rows[0].index("config.strategy")
+    for row in rows[1:]:
+        row[column] = row[column].replace("optimal", r"$\frac{1}{0$")
+    (tmp_path / "dollar.csv").write_text(csv_text(rows))
+    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
+    plot_results(tmp_path / "dollar.csv", tmp_path / "plots", ("svg",))
+    labels = legend(tmp_path / "plots" / "coverage.svg")
+    assert r"$\frac{1}{0$, 16 robots (2 runs)" in labels

@@ -12,7 +12,7 @@ import threading
 import pytest
 
 from swarmshape.errors import InputError
-from swarmshape.experiments.results import read_rows
+from swarmshape.experiments.results import open_results, read_rows
 from swarmshape.experiments.sweep import read_sweep, sweep
 from tests.conftest import SHAPES
 
@@ -67,6 +67,20 @@ def test_a_second_sweep_on_the_same_file_is_refused_while_the_first_runs(tiny, t
     assert len(rows) == 8 and len({row["run"] for row in rows}) == 8
     assert sweep(runs, out, tiny.parent, workers=1) == 0  # the lock went with the first sweep
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_two_links_to_one_results_file_share_its_lock(tmp_path):
+    """Noticed writing the fuzz's rule for which lock a sweep may touch: the lock was named
+    after the link, so two sweeps writing one file through two links each held their own."""
+    for name in ("a.csv", "b.csv"):
+        (tmp_path / name).symlink_to(tmp_path / "results.csv")
+    with (
+        open_results(tmp_path / "a.csv", ["config.seed"]),
+        pytest.raises(InputError, match="another sweep is writing to it"),
+        open_results(tmp_path / "b.csv", ["config.seed"]),
+    ):
+        pass
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv"]
 
 
 @pytest.mark.parametrize("cut", [1, 20, 300], ids=["newline", "in the curve", "in the run key"])

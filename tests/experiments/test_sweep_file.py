@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import os
+import threading
 import tracemalloc
+from pathlib import Path
 
 import pytest
 
 from swarmshape.errors import InputError
-from swarmshape.experiments.sweep import read_sweep
+from swarmshape.experiments.sweep import read_sweep, sweep
 from tests.conftest import SHAPES
 
 LINE = f"shapes = ['{SHAPES / 'line.png'}']\nstrategies = ['optimal']\n"
@@ -137,3 +140,52 @@ def test_good_values_make_every_combination_once_per_seed(tmp_path):
         (0, 1, 7),
         (0, 1, 3),
     ]
+
+
+def test_a_pipe_or_a_device_is_refused_not_read(tmp_path):
+    """Found by the fuzz: a pipe hung the sweep, and /dev/zero filled the memory."""
+    pipe = tmp_path / "pipe.toml"
+    os.mkfifo(pipe)
+    outcome = []
+    thread = threading.Thread(target=lambda: outcome.append(_refusal(pipe)), daemon=True)
+    thread.start()
+    thread.join(5)
+    assert outcome and "pipe.toml: is not a regular file" in outcome[0]
+    assert "is not a regular file" in _refusal(Path("/dev/zero"))
+
+
+def _refusal(path: Path) -> str:
+    try:
+        read_sweep(path)
+    except InputError as error:
+        return str(error)
+    return "read"
+
+
+def test_a_sweep_file_of_a_too_long_name_is_not_there(tmp_path):
+    """Found by the fuzz: looking the name up raised ENAMETOOLONG, an internal error."""
+    with pytest.raises(InputError, match="no such sweep file"):
+        read_sweep(tmp_path / ("s" * 300 + ".toml"))
+
+
+def test_a_sweep_file_nested_too_deeply_is_one_clear_error(tmp_path):
+    path = sweep_file(tmp_path, LINE + f"agents = {'[' * 3000}{']' * 3000}\n")
+    with pytest.raises(InputError, match="nested too deeply to be a sweep file"):
+        read_sweep(path)
+
+
+def test_more_seeds_than_a_range_can_count_are_refused_as_too_many_runs(tmp_path):
+    """Found by the fuzz: seeds = 10**30 was an OverflowError."""
+    path = sweep_file(tmp_path, LINE + f"seeds = {10**30}")
+    with pytest.raises(InputError, match=f"asks for {10**30:,} runs, more than the 100,000"):
+        read_sweep(path)
+
+
+@pytest.mark.parametrize("address", ["", "nope://x:1", "tcp://a:b"])
+def test_a_malformed_dask_address_is_one_clear_error(tmp_path, address):
+    """Found by the fuzz: Dask's ValueError was an internal error, and an empty address ran
+    the sweep on local processes without a word."""
+    runs = read_sweep(sweep_file(tmp_path, LINE))
+    with pytest.raises(InputError, match="is not the address of a Dask scheduler"):
+        sweep(runs, tmp_path / "out.csv", tmp_path, dask=address)
+    assert not (tmp_path / "out.csv").exists()

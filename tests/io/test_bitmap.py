@@ -1,5 +1,10 @@
 from __future__ import annotations
 
+import resource
+import subprocess
+import sys
+import tracemalloc
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -172,3 +177,40 @@ def test_fit_finds_the_largest_shape_the_robots_can_fill(tmp_path):
         assert grid.sum() <= robots
         side = grid.shape[0]
         assert (side + 1) ** 2 > robots, "one cell more across would not fit"
+
+
+@pytest.mark.parametrize("cells", [5001, 10**11])
+def test_cells_beyond_the_largest_arena_are_refused_before_the_grid_is_made(tmp_path, cells):
+    """Found by the fuzz: --cells 99999999999 asked numpy for 47 GB (an internal error), and
+    --cells 100000 took 5.6 GB and 9 s to say there were too many robots."""
+    path = write(tmp_path / "square.png", np.zeros((6, 6)))
+    tracemalloc.start()
+    try:
+        with pytest.raises(BitmapError, match=f"--cells {cells:,} makes a grid of"):
+            load_grid(path, cells=cells)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 10_000_000
+    assert load_grid(path, cells=5000).shape == (5000, 5000)
+
+
+def test_a_png_claiming_gigabytes_is_one_clear_error_under_a_memory_limit(tmp_path):
+    """Found by the long fuzz (seed 11, case 858): one flipped bit made a 71-byte PNG's IDAT
+    chunk claim 4 GB, which Pillow reads at once; under a memory limit (a container, ulimit
+    -v) its MemoryError was an internal error."""
+    path = tmp_path / "claims.png"
+    Image.new("1", (5, 3)).save(path)
+    data = bytearray(path.read_bytes())
+    data[data.index(b"IDAT") - 4] = 0xFF  # the length's top byte: 4 GB more
+    path.write_bytes(bytes(data))
+    code = "import sys; from swarmshape.cli import main; sys.exit(main(sys.argv[1:]))"
+    result = subprocess.run(
+        [sys.executable, "-c", code, str(path), "--preview"], capture_output=True, text=True,
+        timeout=60, preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (2**30, 2**30)),
+    )  # fmt: skip
+    assert result.returncode == 2, result.stderr
+    assert result.stderr == (
+        f"swarmshape: error: {path}: cannot read image (it asks for more memory than there is; "
+        "damaged?)\n"
+    )

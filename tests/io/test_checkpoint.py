@@ -6,7 +6,9 @@ from __future__ import annotations
 import json
 import os
 import pickle
+import re
 import threading
+import zipfile
 
 import numpy as np
 import pytest
@@ -179,3 +181,63 @@ def test_options_a_resume_would_ignore_are_refused(tmp_path, capsys, extra, mess
                  str(state)]) == 3  # fmt: skip
     assert main(["--load-state", str(state), "--headless", *extra]) == 2
     assert message in capsys.readouterr().err
+
+
+def rewritten(path, edit) -> None:
+    """The state file at `path` with its manifest's text changed by `edit`."""
+    with np.load(path, allow_pickle=False) as stored:
+        members = {name: stored[name] for name in stored.files}
+    text = edit(members.pop("manifest").tobytes().decode())
+    with path.open("wb") as handle:
+        np.savez(handle, manifest=np.frombuffer(text.encode(), np.uint8), **members)
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda text: text.replace('"swarm.step": 20', '"swarm.step": NaN'),
+        lambda text: text.replace('"swarm.step": 20', '"swarm.step": -Infinity'),
+        lambda text: text.replace('"swarm.step": 20', '"swarm.step": 1e400'),
+        lambda text: text.replace('"swarm.step": 20', f'"swarm.step": {"[" * 5000}{"]" * 5000}'),
+    ],
+    ids=["nan", "infinity", "overflowing", "nested"],
+)
+def test_a_manifest_json_cannot_hold_is_a_damaged_state(tmp_path, edit):
+    """Found by the fuzz: NaN or 1e400 in the manifest crashed the checksum (allow_nan=False),
+    and nesting 5,000 deep crashed the JSON reader; each was an internal error."""
+    path, _ = saved_state(tmp_path)
+    rewritten(path, edit)
+    with pytest.raises(InputError, match="damaged state file"):
+        load_state(path)
+
+
+def with_array_header(path, edit) -> None:
+    """The state file at `path` with the header of its ``swarm.cell`` array changed by `edit`
+    (its padding keeps its length), and every checksum left as it was."""
+    with zipfile.ZipFile(path) as archive:
+        members = {info.filename: archive.read(info) for info in archive.infolist()}
+    npy = members["swarm.cell.npy"]
+    end = npy.index(b"\n")
+    header = edit(npy[:end].decode("latin-1")).rstrip(" ").ljust(end).encode("latin-1")
+    members["swarm.cell.npy"] = header + npy[end:]
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda header: header.replace("}", "} (", 1),
+        lambda header: re.sub(r"'shape': \(\d+,", "'shape': (1000000000000,", header),
+    ],
+    ids=["unclosed bracket", "huge declared shape"],
+)
+def test_a_damaged_array_header_is_a_damaged_state(tmp_path, edit):
+    """Found by test_every_flipped_byte_is_refused_or_changes_nothing in a checkout whose
+    path made the file a few bytes longer: numpy's TokenError on a header with an unclosed
+    bracket, and its MemoryError on a header declaring 10**12 robots, were internal errors."""
+    path, _ = saved_state(tmp_path)
+    with_array_header(path, edit)
+    with pytest.raises(InputError, match="damaged state file"):
+        load_state(path)

@@ -59,6 +59,14 @@ def test_a_legal_long_name_works_and_a_too_long_one_is_refused_before_the_run(tm
     assert "name is longer than" in capsys.readouterr().err
 
 
+def test_a_too_long_folder_name_is_refused_before_anything_looks_it_up(tmp_path, capsys):
+    """Found by the fuzz: a --frames folder named with 300 bytes crashed check_output, which
+    asked whether it was a folder (ENAMETOOLONG) before measuring its name."""
+    assert main([LINE, "--headless", "--frames", str(tmp_path / ("f" * 300))]) == 2
+    assert "--frames name is longer than the 255 bytes allowed" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_two_options_naming_one_file_are_refused(tmp_path, capsys):
     out = tmp_path / "same.csv"
     assert main([LINE, "--headless", "--trace", str(out), "--positions", str(out)]) == 2

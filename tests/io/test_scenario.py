@@ -37,6 +37,8 @@ def write(tmp_path, text):
         ("[[groups]]\nshape = 'line.png'\nagents = 'many'\n", "agents must be int"),
         ("[[groups]]\nshape = 'line.png'\nagents = true\n", "agents must be int"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'blurple'\n", "not a colour"),
+        ("[[groups]]\nshape = 'line.png'\ncolour = 'rgb(999,999,999)'\n", "not a colour"),
+        ("[[groups]]\nshape = 'line.png'\ncolour = 'hsl(999, 999%, 999%)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\npose = {x = 1, z = 2}\n", "unknown key 'z'"),
         ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "two integers"),
         ("max_speed = 'fast'\n[[groups]]\nshape = 'line.png'\n", "max_speed must be"),
@@ -47,3 +49,10 @@ def test_bad_scenarios_name_the_file_and_the_key(tmp_path, text, message):
     path = write(tmp_path, text)
     with pytest.raises(InputError, match=message):
         load_scenario(path)
+
+
+def test_a_scenario_nested_deeper_than_python_recurses_is_one_clear_error(tmp_path):
+    """Found by the fuzz: tomllib's RecursionError was an internal error."""
+    path = write(tmp_path, f"seed = {'[' * 3000}{']' * 3000}\n[[groups]]\nshape = 'line.png'\n")
+    with pytest.raises(InputError, match=r"s\.toml: nested too deeply to be a scenario"):
+        scenario_settings(path)

@@ -9,7 +9,7 @@ from PIL import Image
 from swarmshape.errors import InputError
 from swarmshape.ui.record import Recorder, caption
 from swarmshape.ui.render import frame
-from tests.conftest import grid_from, make_swarm
+from tests.conftest import SHAPES, grid_from, make_swarm
 
 SHAPE = grid_from("""
 ####
@@ -51,3 +51,17 @@ def test_every_frame_shows_its_step_and_coverage(tmp_path):
 def test_absurd_sizes_are_refused_in_one_line(tmp_path, size):
     with pytest.raises(InputError, match="--record-size"):
         Recorder(tmp_path / "run.gif", size=size)
+
+
+def test_a_frames_folder_named_by_a_dangling_link_is_made_at_its_target(tmp_path):
+    """Found by the fuzz: --frames LINK, a link to a folder not made yet, was an internal
+    error (mkdir of the link's own name); like any output, it is written through the link."""
+    from swarmshape.cli import main
+
+    link = tmp_path / "frames"
+    link.symlink_to(tmp_path / "real")
+    assert (
+        main([str(SHAPES / "line.png"), "--headless", "--max-steps", "2", "--frames", str(link)])
+        == 3
+    )
+    assert link.is_symlink() and len(list((tmp_path / "real").glob("frame-*.png"))) == 3

@@ -52,7 +52,10 @@ def plot_results(
     Existing plots are replaced only with `force`; everything is checked before anything is
     drawn."""
     targets = [out_dir / f"{name}.{form}" for name in PLOTS for form in formats]
-    taken = [path for path in targets if path.exists()]
+    try:
+        taken = [path for path in targets if path.exists()]
+    except OSError as error:  # a name too long, a file where a folder should be
+        raise InputError(f"{out_dir}: cannot write the plots there ({error.strerror})") from None
     if taken and not force:
         raise InputError(f"{taken[0]}: exists; add --force to overwrite it")
     try:
@@ -161,7 +164,7 @@ def _labels(settings: list[Setting]) -> list[str]:
         parts.append(values["strategy"])
         parts += [f"{name} {value}" for name, value in setting
                   if name in differ - {"shape", "strategy"}]  # fmt: skip
-        labels.append(", ".join(parts))
+        labels.append(", ".join(parts).replace("$", r"\$"))  # a "$" starts no formula here
     return labels
 
 

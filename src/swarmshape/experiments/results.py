@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from swarmshape.errors import InputError
-from swarmshape.io.files import atomic_write, check_output
+from swarmshape.io.files import atomic_write, check_output, readable_file
 
 START = b"run,"
 MARKS = {"run", "curve_every", "coverage_curve", "wall_time"}
@@ -286,7 +286,8 @@ def _lock(path: Path) -> Iterator[None]:
     except ImportError:  # Windows
         message = "sweeps need Linux or macOS: their results file is locked with flock"
         raise InputError(message) from None
-    lock = path.resolve().with_name(f".{path.name}.lock")
+    real = path.resolve()  # one lock for the file, whichever link names it
+    lock = real.with_name(f".{real.name}.lock")
     while True:
         try:
             handle = lock.open("a")
@@ -337,12 +338,10 @@ def read_rows(path: Path) -> list[dict[str, str]]:
 
 
 def _reading(path: Path) -> BinaryIO:
+    """`path` open for reading, if it is a regular file: a pipe would hang the reader."""
+    readable_file(path, "a sweep's results CSV")
     try:
         return path.open("rb")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, expected a sweep's results CSV") from None
     except OSError as error:
         raise InputError(f"{path}: cannot read it ({error.strerror})") from None
 

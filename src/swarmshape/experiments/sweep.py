@@ -36,6 +36,7 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
+from swarmshape.io.files import readable_file
 from swarmshape.runs import (
     Observer,
     RunConfig,
@@ -83,7 +84,9 @@ class Sweep:
 
     @property
     def count(self) -> int:
-        return math.prod(len(values) for values in self.values.values()) * len(self.seeds)
+        # len() of a range fails past 2**63 seeds, which are to be refused, not crashed on
+        seeds = self.seeds.stop if isinstance(self.seeds, range) else len(self.seeds)
+        return math.prod(len(values) for values in self.values.values()) * seeds
 
     def __len__(self) -> int:
         return self.count
@@ -127,16 +130,19 @@ def read_sweep(path: Path) -> Sweep:
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
+    """The sweep file's table. Only a regular file is read: a pipe would hang the sweep, and
+    a device such as /dev/zero fill the memory."""
+    if not os.path.exists(path):  # False, not an error, for a name too long to look up
+        raise InputError(f"{path}: no such sweep file")
+    readable_file(path, "a sweep .toml file")
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such sweep file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, expected a sweep .toml file") from None
     except OSError as error:
         raise InputError(f"{path}: cannot read the sweep file ({error.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise InputError(f"{path}: not valid TOML ({error})") from None
+    except RecursionError:  # tomllib recurses once per level of nesting
+        raise InputError(f"{path}: nested too deeply to be a sweep file") from None
 
 
 def _values(path: Path, key: str, value: Any, kind: str, fits: Callable[[Any], bool]) -> list:
@@ -295,7 +301,7 @@ def sweep(
                 progress(already + finished, len(runs))
 
         if already < len(runs):
-            if dask:
+            if dask is not None:
                 _on_dask(todo, base, dask, add)
             else:
                 left = len(runs) - already
@@ -383,6 +389,9 @@ def _on_dask(
         client = Client(address, timeout=10)
     except OSError as error:
         raise InputError(f"cannot reach the Dask scheduler at {address} ({error})") from None
+    except (ValueError, TypeError) as error:  # what Dask makes of a malformed address
+        message = f"--dask {address!r} is not the address of a Dask scheduler ({error})"
+        raise InputError(message) from None
     base = base.resolve()  # the cluster's workers may run elsewhere
     with client:
 

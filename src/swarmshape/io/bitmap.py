@@ -16,6 +16,7 @@ import numpy as np
 from PIL import Image, PngImagePlugin, UnidentifiedImageError
 
 from swarmshape.core.grid import bounding_box, crop, resample
+from swarmshape.core.world import MAX_ARENA_CELLS
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write, readable_file
 
@@ -109,7 +110,14 @@ def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
     long_side = max(picture.ink.shape)
     if picture.one_cell_per_pixel or (cells is None and long_side <= DEFAULT_CELLS):
         cells = long_side
-    sized = resample(picture.ink, cells or DEFAULT_CELLS)
+    across = cells or DEFAULT_CELLS
+    short = max(1, round(min(picture.ink.shape) * across / long_side))
+    if across * short > MAX_ARENA_CELLS:  # before the grid is made: it would not fit in memory
+        raise BitmapError(
+            f"{picture.path}: --cells {across:,} makes a grid of {across:,}x{short:,} cells, "
+            f"more than the {MAX_ARENA_CELLS:,} of the largest arena; lower --cells"
+        )
+    sized = resample(picture.ink, across)
     if not sized.any():
         raise BitmapError(
             f"{picture.path}: the shape vanishes at --cells {cells}; {_help(picture)}"
@@ -182,6 +190,10 @@ def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
         ) from None
     except DECODING_ERRORS as error:
         raise BitmapError(f"{path}: cannot read image ({_reason(error)})") from None
+    except MemoryError:  # a damaged length, read at once: a PNG chunk claiming 4 GB
+        raise BitmapError(
+            f"{path}: cannot read image (it asks for more memory than there is; damaged?)"
+        ) from None
 
 
 def _reason(error: BaseException) -> str:

@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import zipfile
+import zlib
 from collections.abc import Mapping
 from pathlib import Path
+from tokenize import TokenError
 from typing import Any
 
 import numpy as np
@@ -72,8 +75,11 @@ def load_state(path: Path) -> dict[str, Any]:
     try:
         with np.load(path, allow_pickle=False) as archive:
             members = {name: archive[name] for name in archive.files}
-        manifest = json.loads(members.pop(MANIFEST).tobytes().decode("utf-8"))
-    except Exception:  # numpy's and zipfile's parsers raise many kinds on damaged bytes
+        text = members.pop(MANIFEST).tobytes().decode("utf-8")
+        manifest = json.loads(text, parse_float=_finite, parse_constant=_finite)
+    except (ValueError, OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeError,
+            RecursionError, TokenError, MemoryError):  # fmt: skip
+        # numpy tokenizes a damaged array header (TokenError), and allocates what one declares
         raise InputError(f"{path}: damaged state file (it cannot be read)") from None
     return _checked(path, manifest, members)
 
@@ -93,6 +99,15 @@ def _checked(path: Path, manifest: Any, arrays: dict[str, np.ndarray]) -> dict[s
     if claimed != _checksum(manifest, arrays):
         raise InputError(f"{path}: damaged state file (its checksum does not match)")
     return {**plain, **arrays}
+
+
+def _finite(text: str) -> float:
+    """A number of the manifest; NaN and infinities (which `save_state` never writes, and
+    its checksum cannot hold) mean a damaged file."""
+    number = float(text)
+    if not math.isfinite(number):
+        raise ValueError(f"{text} is not a finite number")
+    return number
 
 
 def _checksum(manifest: Mapping[str, Any], arrays: Mapping[str, np.ndarray]) -> str:

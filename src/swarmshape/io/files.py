@@ -106,12 +106,16 @@ def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = Fal
     (or, for a `folder` output, a folder), or that would replace an existing file (or fill a
     non-empty folder) without `may_replace`. A symlink counts as the file it points to."""
     target = Path(os.path.realpath(path))
+    nowhere = OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
+    try:
+        longest = os.pathconf(target.parent, "PC_NAME_MAX")
+    except OSError:
+        raise nowhere from None
+    if len(target.name.encode()) > longest:  # first: such a name cannot even be looked up
+        raise OutputError(f"{path}: {flag} name is longer than the {longest} bytes allowed")
     existing = target if folder and target.is_dir() else target.parent
     if not existing.is_dir() or not os.access(existing, os.W_OK):
-        raise OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
-    longest = os.pathconf(existing, "PC_NAME_MAX")
-    if len(target.name.encode()) > longest:
-        raise OutputError(f"{path}: {flag} name is longer than the {longest} bytes allowed")
+        raise nowhere
     if target.exists():
         mode = target.stat().st_mode
         if folder and not stat.S_ISDIR(mode):

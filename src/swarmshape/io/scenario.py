@@ -107,6 +107,8 @@ def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ScenarioError(f"{path}: not valid TOML ({error})") from None
+    except RecursionError:  # tomllib recurses once per level of nesting
+        raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
     except OSError as error:
         raise ScenarioError(f"{path}: cannot read it ({error.strerror})") from None
     where = _Where(path)
@@ -169,7 +171,11 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
 
 
 def parse_colour(colour: str) -> tuple[int, int, int]:
+    """Red, green and blue, 0 to 255, of a colour name or specifier; ValueError for anything
+    else, including what Pillow reads beyond that range (``rgb(999,0,0)``, ``hsl(999,...)``)."""
     red, green, blue = ImageColor.getrgb(colour)[:3]
+    if not all(0 <= channel <= 255 for channel in (red, green, blue)):
+        raise ValueError(f"{colour!r} is beyond 0 to 255")
     return red, green, blue
 
 

@@ -8,6 +8,7 @@ doubles, so the file and the memory it takes stay a sane size.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from PIL import Image
@@ -58,7 +59,7 @@ class Recorder(Observer):
         if frames is not None:
             if frames.exists() and not frames.is_dir():
                 raise InputError(f"{frames}: --frames needs a folder, and this is a file")
-            frames.mkdir(parents=True, exist_ok=True)
+            Path(os.path.realpath(frames)).mkdir(parents=True, exist_ok=True)  # through a link
         self.animation, self.frames, self.every, self.size = animation, frames, every, size
         self._keep = max(2, min(MAX_FRAMES, FRAME_PIXELS // (width * height)))
         self._images: list[Image.Image] = []
