@@ -27,7 +27,8 @@ COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check")
 NOT_FORMED = 3
 """Exit status of a headless run that stopped before its shape formed (and of a failed check)."""
 RUN_OPTIONS = ("strategy", "order", "seed", "agents", "cells", "threshold", "arena",
-               "max_speed", "max_accel", "max_steps", "start", "fit")  # fmt: skip
+               "max_speed", "max_accel", "max_steps", "start", "fit", "speed_variation",
+               "sense_radius", "distance_noise", "msg_loss")  # fmt: skip
 """Command-line options that are fields of `RunConfig` (``--invert`` too, when given)."""
 
 
@@ -166,7 +167,30 @@ def _shared_options() -> argparse.ArgumentParser:
     sim.add_argument(
         "--max-accel", type=float, help=f"cells per step squared (default {defaults.max_accel})"
     )
+    sim.add_argument(
+        "--speed-variation",
+        type=float,
+        help="each robot's top speed is --max-speed times a factor from [1 - V, 1] (default 0)",
+    )
     sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
+    local = shared.add_argument_group("local programs (what a robot senses)")
+    local.add_argument(
+        "--sense-radius",
+        type=float,
+        help="cells within which a robot senses and hears others "
+        f"(default {defaults.sense_radius:g})",
+    )
+    local.add_argument(
+        "--distance-noise",
+        type=float,
+        help="standard deviation of sensed offsets, in cells (default 0)",
+    )
+    local.add_argument(
+        "--msg-loss",
+        type=float,
+        help="chance per step that a link between neighbours fails; Kilombo's msgSuccessRate is "
+        "1 - P (default 0)",
+    )
     sim.add_argument(
         "--start", type=Path, help="CSV of start cells (columns x,y, one row per robot)"
     )

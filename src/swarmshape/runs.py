@@ -25,6 +25,7 @@ import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.motion import Limits
+from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import World, build_world
@@ -64,6 +65,12 @@ class RunConfig:
     """A CSV of start cells (columns x,y); None draws random free cells."""
     fit: str | None = None
     """"agents": size the shape to the robots (as many cells as there are robots, or fewer)."""
+    speed_variation: float = 0.0
+    """Each robot's top speed is ``max_speed`` times a factor drawn from ``[1 - this, 1]``."""
+    sense_radius: float = Senses.radius
+    """Local programs: how far, in cells, a robot senses and hears its neighbours."""
+    distance_noise: float = Senses.distance_noise
+    msg_loss: float = Senses.msg_loss
 
     def __post_init__(self) -> None:
         if self.seed is not None and not 0 <= self.seed < 2**63:
@@ -77,6 +84,12 @@ class RunConfig:
         if self.fit == "agents" and self.agents is None:
             raise InputError("--fit agents sizes the shape to --agents N; give that number")
         Limits(self.max_speed, self.max_accel)  # checks them
+        Params(speed_variation=self.speed_variation)
+        self.senses()
+
+    def senses(self) -> Senses:
+        """How well a local program's robots sense and talk."""
+        return Senses(self.sense_radius, self.distance_noise, self.msg_loss)
 
     @property
     def shape_path(self) -> Path:
@@ -112,7 +125,8 @@ FITS = (None, "agents")
 
 KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
          "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,
-         "max_steps": int, "start": Path, "fit": str}  # fmt: skip
+         "max_steps": int, "start": Path, "fit": str, "speed_variation": float,
+         "sense_radius": float, "distance_noise": float, "msg_loss": float}  # fmt: skip
 """The kind of value each `RunConfig` field takes (None is allowed where the default is None)."""
 
 
@@ -193,8 +207,9 @@ def build(config: RunConfig) -> Swarm:
 
 def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None) -> Swarm:
     """A swarm on a given world (a painted one, say), run as `config` says."""
-    strategy = strategies.create(config.strategy, order=config.order)
-    params = Params(limits=Limits(config.max_speed, config.max_accel))
+    strategy = strategies.create(config.strategy, order=config.order, senses=config.senses())
+    limits = Limits(config.max_speed, config.max_accel)
+    params = Params(limits=limits, speed_variation=config.speed_variation)
     return Swarm(world, strategy, config.seeded().seed, params, start)
 
 
@@ -222,7 +237,7 @@ def resume(path: Path, strategy: str | None = None) -> tuple[RunConfig, Swarm]:
             f"{path}: was saved with the strategy {config.strategy}, which is code; a state file "
             f"never loads code, so name it again to resume: --strategy {config.strategy}"
         )
-    plugin = strategies.create(config.strategy, order=config.order)
+    plugin = strategies.create(config.strategy, order=config.order, senses=config.senses())
     return config, Swarm.restored(saved.part("swarm"), plugin)
 
 
@@ -242,8 +257,8 @@ class Observer:
 
 
 class Runner:
-    """The one run loop: step a swarm and feed its observers, until the shape is formed or
-    `max_steps` steps have run in total."""
+    """The one run loop: step a swarm and feed its observers, until the shape is formed,
+    `max_steps` steps have run in total, or a local program has come to rest for good."""
 
     def __init__(
         self, swarm: Swarm, observers: Sequence[Observer] = (), max_steps: int | None = None
@@ -260,7 +275,7 @@ class Runner:
 
     @property
     def finished(self) -> bool:
-        return self.swarm.complete or self.out_of_steps
+        return self.swarm.complete or self.out_of_steps or self.swarm.driver.quiet
 
     def step(self) -> None:
         self.swarm.step()

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from swarmshape import strategies
+from swarmshape.core.local import Program
 from swarmshape.core.motion import Motion
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
@@ -84,7 +85,10 @@ def test_options_go_only_to_strategies_that_take_them():
 def test_every_builtin_has_a_description_and_a_mode():
     for name, cls in strategies.available().items():
         assert cls.name == name and cls.description
-        assert isinstance(cls.motion, Motion)
+        if issubclass(cls, Program):
+            assert cls.kind == "local" and cls.message_size >= 0
+        else:
+            assert cls.kind == "central" and isinstance(cls.motion, Motion)
 
 
 def test_concurrent_strategies_move_many_agents_at_once():

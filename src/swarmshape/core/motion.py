@@ -72,16 +72,19 @@ def advance(offset: np.ndarray, speed: np.ndarray, ahead: np.ndarray, limits: Li
     return step
 
 
-def step_sizes(speed: np.ndarray, room: np.ndarray, limits: Limits) -> np.ndarray:
-    """How far each robot goes this step: speed rises by at most ``max_accel``, and is capped
-    so that, braking at ``max_accel``, the robot stops within `room`. A room that never shrinks
-    but by the robot's own motion (a fixed stopping point, or one moving ahead) never asks for
-    harder braking than that."""
+def step_sizes(
+    speed: np.ndarray, room: np.ndarray, limits: Limits, pace: np.ndarray | None = None
+) -> np.ndarray:
+    """How far each robot goes this step: speed rises by at most ``max_accel`` up to its top
+    speed (``max_speed``, times its `pace` if given), and is capped so that, braking at
+    ``max_accel``, the robot stops within `room`. A room that never shrinks but by the robot's
+    own motion (a fixed stopping point, or one moving ahead) never asks for harder braking."""
     a = limits.max_accel
     # the largest v whose braking run v + (v - a) + (v - 2a) + ... still fits in `room`
     whole = np.floor((np.sqrt(1.0 + 8.0 * room / a) - 1.0) / 2.0)
     stop_cap = (room + a * whole * (whole + 1.0) / 2.0) / (whole + 1.0)
-    return np.minimum.reduce([np.full_like(speed, limits.max_speed), speed + a, stop_cap, room])
+    top = np.full_like(speed, limits.max_speed) if pace is None else limits.max_speed * pace
+    return np.minimum.reduce([top, speed + a, stop_cap, room])
 
 
 def positions(cell: np.ndarray, direction: np.ndarray, offset: np.ndarray) -> np.ndarray:

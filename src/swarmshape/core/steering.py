@@ -42,6 +42,7 @@ class Strategy:
 
     name: ClassVar[str]
     description: ClassVar[str]
+    kind: ClassVar[str] = "central"
     motion: ClassVar[Motion] = Motion.SWAP
 
     def on_start(self, swarm: SwarmView) -> None:
@@ -197,6 +198,11 @@ class Steering:
     @property
     def messages_sent(self) -> int:
         return len(self.queue.log)
+
+    @property
+    def quiet(self) -> bool:
+        """A central planner never comes to rest short of its shape: its movers keep trying."""
+        return False
 
     def snapshot(self) -> dict[str, Any]:
         values = {

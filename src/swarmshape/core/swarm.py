@@ -30,7 +30,7 @@ FOLLOW_PASSES = 64
 frees one more link; a longer train moves with a short ripple)."""
 
 ARRAYS = ("cell", "start_cell", "direction", "ahead", "offset", "speed", "distance", "state",
-          "filled", "overlaps", "leader")  # fmt: skip
+          "filled", "overlaps", "leader", "pace")  # fmt: skip
 """Per-robot (and per-target, per-group) arrays that a saved run keeps."""
 
 
@@ -43,6 +43,13 @@ class Params:
     """Chance per step that a resting spare robot tries a random step."""
     patience: int = 3
     """Steps a mover waits behind a resting robot before it replans; twice that, it sidesteps."""
+    speed_variation: float = 0.0
+    """Each robot's top speed is ``limits.max_speed`` times a factor from ``[1 - this, 1]``,
+    drawn once (real robots differ; slow ones make traffic jams)."""
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.speed_variation <= 0.9:
+            raise InputError(f"--speed-variation must be from 0 to 0.9, got {self.speed_variation}")
 
 
 class Driver(Protocol):
@@ -71,6 +78,10 @@ class Driver(Protocol):
 
     @property
     def messages_sent(self) -> int: ...
+
+    @property
+    def quiet(self) -> bool:
+        """The run has come to rest for good without forming its shape (the loop stops)."""
 
     def snapshot(self) -> dict[str, Any]:
         """The driver's state, as plain values."""
@@ -122,6 +133,10 @@ class Swarm:
         self.state = np.full(n, WAITING, dtype=np.int8)
         self.leader = np.full(n, -1, dtype=np.int64)
         """The robot each robot follows into a cell it is leaving, or -1."""
+        self.pace = np.ones(n)
+        """Each robot's top speed as a fraction of the limit."""
+        if self.params.speed_variation > 0:
+            self.pace = self.rng.uniform(1.0 - self.params.speed_variation, 1.0, n)
         self.lattice = Lattice(world.size)
         self.lattice.grid[self.cell[:, 0], self.cell[:, 1]] = np.arange(n)
         self.filled = np.zeros(len(world.targets), dtype=bool)
@@ -155,6 +170,7 @@ class Swarm:
             "max_accel": limits.max_accel,
             "wander_rate": self.params.wander_rate,
             "patience": self.params.patience,
+            "speed_variation": self.params.speed_variation,
             "rng": self.rng.bit_generator.state,
             "step": self.step_count,
             "overlap_total": self.overlap_total,
@@ -178,7 +194,8 @@ class Swarm:
         except InputError as error:
             raise saved.error("max_speed", f"and max_accel are not valid ({error})") from None
         wander_rate = saved.number("wander_rate", 0, 1)
-        params = Params(limits, wander_rate, saved.integer("patience", 1, 10**6))
+        patience = saved.integer("patience", 1, 10**6)
+        params = Params(limits, wander_rate, patience, saved.number("speed_variation", 0, 0.9))
         swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
         swarm._restore_arrays(saved)
         swarm._restore_rng(saved)
@@ -209,6 +226,7 @@ class Swarm:
         self.filled = saved.array("filled", bool, (len(self.world.targets),))
         self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0)
         self.leader = saved.array("leader", np.int64, (n,), -1, n - 1)
+        self.pace = saved.array("pace", np.float64, (n,), 0.1, 1)
         self.lattice = Lattice(self.world.size)
         holder = saved.array("holder", np.int64, self.lattice.holder.shape, WALL, n - 1)
         queued = saved.array("queued", np.int64, self.lattice.queued.shape, FREE, n - 1)
@@ -315,7 +333,7 @@ class Swarm:
         up the cell behind it, to the robot queued for it if there is one."""
         limits = self.params.limits
         room = np.maximum(self.ahead - self.offset, 0.0)
-        step = step_sizes(self.speed, room, limits)
+        step = step_sizes(self.speed, room, limits, self.pace)
         step[self.ahead == 0] = 0.0
         self._behind_leaders(step, room)
         self.offset += step
@@ -349,7 +367,9 @@ class Swarm:
         for _ in range(FOLLOW_PASSES):
             f = followers[active]
             wall = np.maximum(lead[active] + step[leaders[active]], 0.0)
-            capped = step_sizes(self.speed[f], np.minimum(room[f], wall), self.params.limits)
+            capped = step_sizes(
+                self.speed[f], np.minimum(room[f], wall), self.params.limits, self.pace[f]
+            )
             raised = capped > step[f]
             step[f] = capped
             # only followers of robots that just went further can go further themselves

@@ -78,8 +78,9 @@ def load_state(path: Path) -> dict[str, Any]:
         text = members.pop(MANIFEST).tobytes().decode("utf-8")
         manifest = json.loads(text, parse_float=_finite, parse_constant=_finite)
     except (ValueError, OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeError,
-            RecursionError, TokenError, MemoryError):  # fmt: skip
-        # numpy tokenizes a damaged array header (TokenError), and allocates what one declares
+            RecursionError, TokenError, MemoryError, NotImplementedError):  # fmt: skip
+        # numpy tokenizes a damaged array header (TokenError), and allocates what one declares;
+        # zipfile meets compression methods it does not know (NotImplementedError)
         raise InputError(f"{path}: damaged state file (it cannot be read)") from None
     return _checked(path, manifest, members)
 

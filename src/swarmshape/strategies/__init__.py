@@ -1,6 +1,7 @@
 """The strategy registry: every plug-in by name, built-in, installed, or named on the command line.
 
-A strategy subclasses `swarmshape.core.steering.Strategy`. `register` makes it reachable as
+A plug-in is of one of two kinds: a central planner subclasses `swarmshape.core.steering.Strategy`,
+a local robot program subclasses `swarmshape.core.local.Program`. `register` makes it reachable as
 ``--strategy NAME``; installed packages offer theirs under the entry-point group
 ``swarmshape.strategies``. Code can also be named directly, ``path/to/file.py:Class`` or
 ``package.module:Class``, but only by the user on the command line or from Python: scenario and
@@ -19,21 +20,24 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from swarmshape.core.local import Program
 from swarmshape.core.steering import Strategy
 from swarmshape.errors import InputError
 
 ENTRY_POINTS = "swarmshape.strategies"
 
-REGISTRY: dict[str, type[Strategy]] = {}
+Plugin = type[Strategy] | type[Program]
+
+REGISTRY: dict[str, Plugin] = {}
 
 
-def register(cls: type[Strategy]) -> type[Strategy]:
+def register(cls: Plugin) -> Plugin:
     """Class decorator: make `cls` available by its ``name``."""
     REGISTRY[cls.name] = cls
     return cls
 
 
-def available() -> dict[str, type[Strategy]]:
+def available() -> dict[str, Plugin]:
     """Registered strategies plus those installed packages offer, by name."""
     found = dict(REGISTRY)
     for entry in entry_points(group=ENTRY_POINTS):
@@ -47,8 +51,8 @@ def is_code(name: str) -> bool:
     return ":" in name
 
 
-def get(name: str) -> type[Strategy]:
-    """The strategy class called `name`, or found at ``file.py:Class`` or ``module:Class``."""
+def get(name: str) -> Plugin:
+    """The plug-in class called `name`, or found at ``file.py:Class`` or ``module:Class``."""
     if is_code(name):
         cls = _import(name)
     else:
@@ -57,20 +61,22 @@ def get(name: str) -> type[Strategy]:
             choices = ", ".join(sorted(known))
             raise InputError(f"unknown strategy {name!r}; choose one of {choices}")
         cls = known[name]
-    if not (isinstance(cls, type) and issubclass(cls, Strategy)):
-        raise InputError(f"strategy {name!r} is not a subclass of swarmshape.Strategy")
+    if not (isinstance(cls, type) and issubclass(cls, Strategy | Program)):
+        raise InputError(
+            f"strategy {name!r} is not a subclass of swarmshape.Strategy or swarmshape.Program"
+        )
     return cls
 
 
-def create(strategy: str | type[Strategy], **options: Any) -> Strategy:
-    """A new strategy (by name or class), given those of `options` its constructor accepts
-    (e.g. ``order``)."""
+def create(strategy: str | Plugin, **options: Any) -> Strategy | Program:
+    """A new plug-in (by name or class), given those of `options` its constructor accepts
+    (``order`` for the paper's strategy, ``senses`` for local programs)."""
     cls = strategy if isinstance(strategy, type) else get(strategy)
     accepted = inspect.signature(cls).parameters
     return cls(**{key: value for key, value in options.items() if key in accepted})
 
 
-def _import(spec: str) -> type[Strategy]:
+def _import(spec: str) -> Plugin:
     module_name, _, attribute = spec.rpartition(":")
     if module_name.endswith(".py"):
         module = _load_file(Path(module_name), spec)
@@ -97,4 +103,4 @@ def _load_file(path: Path, spec: str) -> ModuleType:
     return module
 
 
-from swarmshape.strategies import concurrent, paper  # noqa: E402,F401  (registers built-ins)
+from swarmshape.strategies import concurrent, local_swap, paper  # noqa: E402,F401  (built-ins)

@@ -1,0 +1,288 @@
+"""Local programs: one program runs on every robot and sees only what that robot can sense.
+
+A `Program` is the second plug-in kind beside central strategies. Each step it is given a
+`Perception` (its neighbours within the sensing radius, their last messages, its odometry and
+the shape's bitmap in its seed frame) and its own `Memory` (arrays it declared), and returns
+every robot's move (0 stay, or a direction index of `swarmshape.core.motion.STEPS`, in seed-frame
+axes) and the message it broadcasts. It never receives the `Swarm`, so it cannot cheat.
+
+`LocalControl` is the swarm's driver for it: it builds the perception, turns moves into claims
+(a move into a taken cell simply does not happen, and the robot's odometry shows it next step),
+keeps the broadcasts, and marks a target filled while a robot of its group rests on it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import (
+    Blueprint,
+    Perception,
+    Senses,
+    neighbours,
+    quarter_turns,
+    turn,
+)
+from swarmshape.core.snapshot import Snapshot
+from swarmshape.core.states import MOVING, SETTLED, WAITING
+from swarmshape.errors import InputError
+
+if TYPE_CHECKING:
+    from swarmshape.core.swarm import Swarm
+
+QUIET = 200
+"""Steps without any robot moving or any broadcast changing after which a local run has come
+to rest for good (a program that builds an imperfect shape stops there)."""
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One array of per-robot memory a program declares: its dtype, starting value, and width
+    (None: one value per robot; k: ``(n, k)``)."""
+
+    dtype: type
+    fill: Any = 0
+    width: int | None = None
+
+
+class Memory:
+    """A program's per-robot arrays, by the names it declared (``memory.goal`` and so on)."""
+
+    def __init__(self, slots: dict[str, Slot], robots: int) -> None:
+        self.slots = slots
+        self.robots = robots
+        for name, slot in slots.items():
+            shape = (robots,) if slot.width is None else (robots, slot.width)
+            setattr(self, name, np.full(shape, slot.fill, dtype=slot.dtype))
+
+    def __len__(self) -> int:
+        return self.robots
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {name: getattr(self, name) for name in self.slots}
+
+
+class ProgramError(InputError):
+    """A program returned something the core cannot act on; the message says what."""
+
+
+class Program:
+    """Base class of local programs. Subclass it, give it a ``name``, a one-line
+    ``description``, the ``message_size`` (ints per broadcast), the ``memory`` it keeps, and
+    write `act`. Randomness comes only from the `rng` passed in."""
+
+    name: ClassVar[str]
+    description: ClassVar[str]
+    kind: ClassVar[str] = "local"
+    message_size: ClassVar[int] = 0
+    memory: ClassVar[dict[str, Slot]] = {}
+    states: ClassVar[tuple[str, ...]] = ()
+    """Names of the values of ``memory.state``, if the program keeps one (the viewer colours
+    robots by it)."""
+
+    def __init__(self, senses: Senses | None = None) -> None:
+        self.senses = senses or Senses()
+
+    def act(
+        self, sense: Perception, memory: Memory, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Every robot's move ``(n,)`` and broadcast ``(n, message_size)``."""
+        raise NotImplementedError(f"program {self.name!r} must define act(sense, memory, rng)")
+
+    def finished(self, memory: Memory) -> np.ndarray:
+        """Robots that are done for good and never move again (checked by ``swarmshape
+        check``). Default: none."""
+        return np.zeros(len(memory), dtype=bool)
+
+    def drive(self, swarm: Swarm) -> LocalControl:
+        """The swarm's driver for this plug-in (the core's side of the contract)."""
+        return LocalControl(swarm, self)
+
+
+def _link_up(a: np.ndarray, b: np.ndarray, salt: int, loss: float) -> np.ndarray:
+    """Whether the link between robots `a` and `b` works this step: the same answer from both
+    ends, drawn by hashing the pair with a salt from the run's generator (splitmix64)."""
+    with np.errstate(over="ignore"):
+        x = np.minimum(a, b).astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+        x ^= np.maximum(a, b).astype(np.uint64) + np.uint64(salt)
+        x ^= x >> np.uint64(30)
+        x *= np.uint64(0xBF58476D1CE4E5B9)
+        x ^= x >> np.uint64(27)
+        x *= np.uint64(0x94D049BB133111EB)
+        x ^= x >> np.uint64(31)
+    return (x >> np.uint64(11)).astype(np.float64) / float(1 << 53) >= loss
+
+
+class LocalControl:
+    """Runs one `Program` on every robot of a swarm (the `Driver` of local programs)."""
+
+    def __init__(self, swarm: Swarm, program: Program) -> None:
+        self.swarm = swarm
+        self.program = program
+        n = len(swarm.cell)
+        self.memory = Memory(program.memory, n)
+        self.broadcast = np.zeros((n, program.message_size), dtype=np.int64)
+        self.last_cell = swarm.cell.copy()
+        self.reach = program.senses.reach()
+        self.sent = 0
+        self.lost = 0
+        self.quiet_steps = 0
+        self.number = np.zeros(n, dtype=np.int64)
+        for group in range(len(swarm.world.groups)):
+            mine = swarm.group == group
+            self.number[mine] = np.arange(mine.sum())
+
+    @property
+    def messages_sent(self) -> int:
+        return self.sent
+
+    @property
+    def quiet(self) -> bool:
+        return self.quiet_steps >= QUIET
+
+    def index_world(self) -> None:
+        world = self.swarm.world
+        self.blueprint = Blueprint.of([g.frame_cells for g in world.groups])
+        self.turns = quarter_turns([g.pose for g in world.groups])
+        self.seed_group = np.repeat(
+            np.arange(len(world.groups)), [len(g.seeds) for g in world.groups]
+        )
+        frames = [g.pose.to_frame(g.seeds) for g in world.groups]
+        self.seed_frame = np.concatenate(frames) if frames else np.zeros((0, 2), dtype=np.int64)
+        self.frame_directions = _turned_directions()
+
+    def start(self) -> None:
+        self._note_filled()
+
+    def decide(self) -> None:
+        swarm = self.swarm
+        sense = self.perceive()
+        moves, messages = self.program.act(sense, self.memory, swarm.rng)
+        moves, messages = self._checked(moves, messages)
+        changed = not np.array_equal(messages, self.broadcast)
+        self.broadcast = messages
+        self.sent += len(messages) if self.program.message_size else 0
+        robots = np.flatnonzero(sense.ready & (moves > 0))
+        directions = self.frame_directions[self.turns[swarm.group[robots]], moves[robots]]
+        keys = swarm.lattice.key(swarm.cell[robots])
+        entering = keys + swarm.lattice.offsets[directions]
+        allowed = swarm.enterable(entering, swarm.group[robots], directions)
+        swarm.claim(robots[allowed], directions[allowed], keys[allowed])
+        still = not (swarm.ahead > 0).any() and not changed
+        self.quiet_steps = self.quiet_steps + 1 if still else 0
+
+    def perceive(self) -> Perception:
+        """What every robot senses now."""
+        swarm = self.swarm
+        n, senses = len(swarm.cell), self.program.senses
+        seeds = swarm.world.seeds
+        start, owner, other = neighbours(swarm.cell, seeds, swarm.world.size, self.reach)
+        seed = other >= n
+        centres = np.concatenate([swarm.positions(), seeds + 0.5])
+        offset = centres[other] - centres[owner]
+        if senses.distance_noise > 0:
+            offset = offset + swarm.rng.normal(0.0, senses.distance_noise, offset.shape)
+        group = np.concatenate([swarm.group, self.seed_group])
+        offset = turn(offset, (-self.turns[group[owner]]) % 4)
+        heard = np.ones(len(owner), dtype=bool)
+        if senses.msg_loss > 0:
+            salt = int(swarm.rng.integers(2**62))
+            heard = _link_up(owner, other, salt, senses.msg_loss)
+        robot = heard & ~seed
+        message = np.zeros((len(owner), self.program.message_size), dtype=np.int64)
+        message[robot] = self.broadcast[other[robot]]
+        seed_frame = np.zeros((len(owner), 2), dtype=np.int64)
+        heard_seed = heard & seed
+        seed_frame[heard_seed] = self.seed_frame[other[heard_seed] - n]
+        self.lost += int((~heard & ~seed).sum())
+        moved = turn(swarm.cell - self.last_cell, (-self.turns[swarm.group]) % 4)
+        self.last_cell = swarm.cell.copy()
+        return Perception(
+            number=self.number,
+            group=swarm.group,
+            ready=swarm.ahead == 0,
+            moved=moved,
+            start=start,
+            owner=owner,
+            offset=offset,
+            seed=seed,
+            kin=group[other] == group[owner],
+            heard=heard,
+            message=message,
+            seed_frame=seed_frame,
+            blueprint=self.blueprint,
+            step=swarm.step_count,
+        )
+
+    def _checked(self, moves: Any, messages: Any) -> tuple[np.ndarray, np.ndarray]:
+        n, size, name = len(self.swarm.cell), self.program.message_size, self.program.name
+        moves, messages = np.asarray(moves), np.asarray(messages)
+        if moves.shape != (n,) or not np.issubdtype(moves.dtype, np.integer):
+            raise ProgramError(f"program {name!r}: act must return {n} integer moves")
+        if ((moves < 0) | (moves >= len(STEPS))).any():
+            raise ProgramError(f"program {name!r}: a move is not 0 (stay) to 4 (a direction)")
+        if messages.shape != (n, size) or not np.issubdtype(messages.dtype, np.integer):
+            raise ProgramError(f"program {name!r}: act must return messages of shape ({n}, {size})")
+        return moves.astype(np.int64), messages.astype(np.int64)
+
+    def arrived(self) -> None:
+        self._note_filled()
+
+    def _note_filled(self) -> None:
+        """A target is filled while a robot of its group rests on it; robots the program calls
+        finished are settled, and those under way are moving."""
+        swarm = self.swarm
+        index = np.full(swarm.world.size, -1)
+        index[swarm.world.targets[:, 0], swarm.world.targets[:, 1]] = np.arange(len(swarm.filled))
+        at = index[swarm.cell[:, 0], swarm.cell[:, 1]]
+        resting = (swarm.ahead == 0) & (at >= 0)
+        resting &= swarm.world.target_group[np.maximum(at, 0)] == swarm.group
+        swarm.filled[:] = False
+        swarm.filled[at[resting]] = True
+        swarm.state[:] = np.where(swarm.ahead > 0, MOVING, WAITING)
+        swarm.state[self.program.finished(self.memory)] = SETTLED
+
+    def completed(self, group: int) -> None:
+        """Nothing to hand over: the program keeps running as it is."""
+
+    def reshaped(self, renumber: np.ndarray) -> None:
+        """The robots learn the new bitmap at `index_world`; what they do with it is theirs."""
+
+    def hand_out(self, group: int) -> None:
+        self._note_filled()
+
+    def snapshot(self) -> dict[str, Any]:
+        values = {f"memory.{name}": array for name, array in self.memory.arrays().items()}
+        return values | {
+            "broadcast": self.broadcast,
+            "last_cell": self.last_cell,
+            "sent": self.sent,
+            "lost": self.lost,
+            "quiet_steps": self.quiet_steps,
+        }
+
+    def restore(self, saved: Snapshot) -> None:
+        n = len(self.swarm.cell)
+        for name, slot in self.program.memory.items():
+            shape = (n,) if slot.width is None else (n, slot.width)
+            value = saved.array(f"memory.{name}", slot.dtype, shape, finite=None)
+            setattr(self.memory, name, value)
+        size = (n, self.program.message_size)
+        self.broadcast = saved.array("broadcast", np.int64, size)
+        self.last_cell = saved.array("last_cell", np.int64, (n, 2))
+        self.sent = saved.integer("sent", 0)
+        self.lost = saved.integer("lost", 0)
+        self.quiet_steps = saved.integer("quiet_steps", 0)
+
+
+def _turned_directions() -> np.ndarray:
+    """``[turns, direction]``: the `STEPS` index of a direction turned by quarter turns."""
+    table = np.zeros((4, len(STEPS)), dtype=np.int64)
+    for turns in range(4):
+        turned = turn(STEPS, np.full(len(STEPS), turns))
+        table[turns] = [np.flatnonzero((step == STEPS).all(axis=1))[0] for step in turned]
+    return table

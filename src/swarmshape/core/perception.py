@@ -1,0 +1,167 @@
+"""What one robot can know: its neighbours within a sensing radius, their last messages, its
+own odometry, and the shape's bitmap in its seed frame. Built for all robots at once.
+
+A local program (`swarmshape.core.local`) sees only a `Perception`, never the swarm. Neighbour
+lists are CSR rows: robot ``i``'s entries are ``start[i]:start[i + 1]`` of every per-entry
+array (``owner`` repeats ``i`` over them). Offsets and moves are in the robot's seed-frame
+axes, as if every robot had a compass aligned with its seeds' L, so a rotated or translated
+scenario is the same problem to a program. Noise is drawn from the run's one generator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swarmshape.core.shape import Pose
+from swarmshape.errors import InputError
+
+
+@dataclass(frozen=True)
+class Senses:
+    """How well robots sense and talk; the names match Kilombo's and ARGoS's knobs."""
+
+    radius: float = 3.0
+    """Sensing and communication range in cells (a Kilobot reaches about three bodies)."""
+    distance_noise: float = 0.0
+    """Standard deviation, in cells, of Gaussian noise on each sensed offset."""
+    msg_loss: float = 0.0
+    """Chance per step that the link between two neighbours fails, both ways (an obstacle in
+    the infrared); each message is lost with this chance, Kilombo's ``1 - msgSuccessRate``."""
+
+    def __post_init__(self) -> None:
+        if not 1.0 <= self.radius <= 16.0:
+            raise InputError(f"--sense-radius must be from 1 to 16 cells, got {self.radius}")
+        if not 0.0 <= self.distance_noise <= 1.0:
+            raise InputError(
+                f"--distance-noise must be from 0 to 1 cell, got {self.distance_noise}"
+            )
+        if not 0.0 <= self.msg_loss < 1.0:
+            raise InputError(f"--msg-loss must be at least 0 and below 1, got {self.msg_loss}")
+
+    def reach(self) -> np.ndarray:
+        """Cell offsets ``(k, 2)`` within the radius, nearest first, without ``(0, 0)``."""
+        r = int(self.radius)
+        grid = np.mgrid[-r : r + 1, -r : r + 1].reshape(2, -1).T
+        distance = np.hypot(grid[:, 0], grid[:, 1])
+        keep = (distance <= self.radius) & (distance > 0)
+        order = np.lexsort((grid[keep, 1], grid[keep, 0], distance[keep]))
+        return grid[keep][order]
+
+
+@dataclass(frozen=True, eq=False)
+class Blueprint:
+    """The shapes, as each robot knows them: every group's cells in its seed frame."""
+
+    cells: tuple[np.ndarray, ...]
+    """Per group, its shape's frame cells ``(k, 2)`` in row-major order (the same list every
+    robot of the group holds)."""
+    _boxes: tuple[tuple[np.ndarray, np.ndarray], ...] = field(repr=False, default=())
+
+    @classmethod
+    def of(cls, frame_cells: list[np.ndarray]) -> Blueprint:
+        boxes = []
+        for cells in frame_cells:
+            low = cells.min(axis=0) if len(cells) else np.zeros(2, dtype=np.int64)
+            high = cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)
+            grid = np.zeros(high - low, dtype=bool)
+            grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+            boxes.append((low, grid))
+        return cls(tuple(frame_cells), _boxes=tuple(boxes))
+
+    def contains(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
+        found = np.zeros(len(frame), dtype=bool)
+        for group, (low, grid) in enumerate(self._boxes):
+            mine = np.flatnonzero(groups == group)
+            local = frame[mine] - low
+            fits = ((local >= 0) & (local < grid.shape)).all(axis=1)
+            found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
+        return found
+
+    def count(self, groups: np.ndarray) -> np.ndarray:
+        """How many cells the shape of each entry's group has."""
+        return np.array([len(c) for c in self.cells], dtype=np.int64)[groups]
+
+    def cell(self, groups: np.ndarray, numbers: np.ndarray) -> np.ndarray:
+        """The frame cell numbered `numbers` (row-major) in each entry's group's shape."""
+        out = np.zeros((len(groups), 2), dtype=np.int64)
+        for group, cells in enumerate(self.cells):
+            mine = groups == group
+            out[mine] = cells[numbers[mine]]
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class Perception:
+    """One step's senses of every robot (robots ``0..n-1``; entries in CSR rows by robot)."""
+
+    number: np.ndarray
+    """Each robot's number in its group, 0 up: a unique ID it was built with."""
+    group: np.ndarray
+    ready: np.ndarray
+    """At rest on a cell centre: a move it asks for can start now (others are under way)."""
+    moved: np.ndarray
+    """Odometry: the whole cells each robot moved since the last step ``(n, 2)``."""
+    start: np.ndarray
+    """CSR row starts ``(n + 1,)``."""
+    owner: np.ndarray
+    """The robot each entry belongs to."""
+    offset: np.ndarray
+    """The neighbour's centre relative to the robot's, in cells ``(m, 2)`` (noisy if set)."""
+    seed: np.ndarray
+    """The neighbour is a seed: it never moves, and broadcasts `seed_frame`."""
+    kin: np.ndarray
+    """The neighbour belongs to the robot's group (its messages are in the same language)."""
+    heard: np.ndarray
+    """Its message came through this step."""
+    message: np.ndarray
+    """The neighbour's last broadcast ``(m, k)`` where heard, zeros where not (and for seeds)."""
+    seed_frame: np.ndarray
+    """A heard seed's frame cell ``(m, 2)`` (zeros elsewhere)."""
+    blueprint: Blueprint
+    step: int
+
+    def __len__(self) -> int:
+        return len(self.number)
+
+
+def quarter_turns(poses: list[Pose]) -> np.ndarray:
+    """Per group, the quarter turns from its seed frame's axes to the world's."""
+    return np.array([p.rotation // 90 % 4 for p in poses], dtype=np.int64)
+
+
+def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """Rotate integer or float vectors ``(k, 2)`` by per-row quarter turns, clockwise on screen."""
+    out = np.array(vectors, dtype=np.result_type(vectors, np.int64), copy=True)
+    for _ in range(3):
+        rows = turns > 0
+        out[rows] = np.column_stack([-out[rows, 1], out[rows, 0]])
+        turns = np.where(rows, turns - 1, 0)
+    return out
+
+
+def neighbours(
+    cell: np.ndarray, seeds: np.ndarray, size: tuple[int, int], reach: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(start, owner, other)``: for every robot, the robots and seeds (``n + seed index``)
+    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. One grid
+    lookup per offset, never a loop over robots."""
+    n = len(cell)
+    r = int(np.abs(reach).max()) if len(reach) else 0
+    who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
+    who[cell[:, 0] + r, cell[:, 1] + r] = np.arange(n)
+    who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
+    owners, others = [], []
+    for dx, dy in reach:
+        found = who[cell[:, 0] + r + dx, cell[:, 1] + r + dy]
+        hit = np.flatnonzero(found >= 0)
+        owners.append(hit)
+        others.append(found[hit])
+    owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
+    other = np.concatenate(others) if others else np.zeros(0, dtype=np.int64)
+    order = np.argsort(owner, kind="stable")
+    owner, other = owner[order], other[order]
+    start = np.searchsorted(owner, np.arange(n + 1))
+    return start, owner, other
