@@ -14,6 +14,7 @@ PROMISES = {
     "headless.py": "robots formed it in",
     "my_strategy.py": "no problems found",
     "frames.py": "frames of shape (200, 320, 3) and dtype uint8",
+    "my_program.py": "cells from a seed",
 }
 
 

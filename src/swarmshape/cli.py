@@ -377,7 +377,7 @@ def list_strategies(args: argparse.Namespace) -> int:
     known = available()
     width = max(len(name) for name in known)
     for name, cls in sorted(known.items()):
-        print(f"{name:<{width}}  {cls.description}")
+        print(f"{name:<{width}}  {cls.kind:<7}  {cls.description}")
     return 0
 
 

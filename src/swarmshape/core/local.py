@@ -93,6 +93,11 @@ class Program:
         """Every robot's move ``(n,)`` and broadcast ``(n, message_size)``."""
         raise NotImplementedError(f"program {self.name!r} must define act(sense, memory, rng)")
 
+    def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray] | None:
+        """Robots that believe they know where they are, and their frame cells ``(n, 2)``, for
+        the localisation error in the metrics. Default: the program does not localise."""
+        return None
+
     def finished(self, memory: Memory) -> np.ndarray:
         """Robots that are done for good and never move again (checked by ``swarmshape
         check``). Default: none."""
@@ -143,6 +148,24 @@ class LocalControl:
     @property
     def quiet(self) -> bool:
         return self.quiet_steps >= QUIET
+
+    def figures(self) -> dict[str, Any]:
+        """Messages lost, and how far robots' own position estimates are off (cells)."""
+        figures: dict[str, Any] = {"messages_lost": self.lost, "localisation_error": None}
+        estimate = self.program.estimate(self.memory)
+        if estimate is not None and estimate[0].any():
+            localised, frame = estimate
+            truth = np.zeros_like(self.swarm.cell)
+            for group, g in enumerate(self.swarm.world.groups):
+                mine = self.swarm.group == group
+                truth[mine] = g.pose.to_frame(self.swarm.cell[mine])
+            error = np.hypot(*(frame[localised] - truth[localised]).T)
+            figures["localisation_error"] = {
+                "mean": round(float(error.mean()), 4),
+                "max": round(float(error.max()), 4),
+                "localised": int(localised.sum()),
+            }
+        return figures
 
     def index_world(self) -> None:
         world = self.swarm.world
@@ -233,18 +256,18 @@ class LocalControl:
         self._note_filled()
 
     def _note_filled(self) -> None:
-        """A target is filled while a robot of its group rests on it; robots the program calls
-        finished are settled, and those under way are moving."""
+        """Robots the program calls finished are settled, those under way are moving; a target
+        is filled while a settled robot of its group is on it."""
         swarm = self.swarm
         index = np.full(swarm.world.size, -1)
         index[swarm.world.targets[:, 0], swarm.world.targets[:, 1]] = np.arange(len(swarm.filled))
         at = index[swarm.cell[:, 0], swarm.cell[:, 1]]
-        resting = (swarm.ahead == 0) & (at >= 0)
-        resting &= swarm.world.target_group[np.maximum(at, 0)] == swarm.group
-        swarm.filled[:] = False
-        swarm.filled[at[resting]] = True
         swarm.state[:] = np.where(swarm.ahead > 0, MOVING, WAITING)
-        swarm.state[self.program.finished(self.memory)] = SETTLED
+        swarm.state[self.program.finished(self.memory) & (swarm.ahead == 0)] = SETTLED
+        settled = (swarm.state == SETTLED) & (at >= 0)
+        settled &= swarm.world.target_group[np.maximum(at, 0)] == swarm.group
+        swarm.filled[:] = False
+        swarm.filled[at[settled]] = True
 
     def completed(self, group: int) -> None:
         """Nothing to hand over: the program keeps running as it is."""

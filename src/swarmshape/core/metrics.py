@@ -110,6 +110,7 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
         "total_distance": round(float(swarm.distance.sum()), DIGITS),
         "overlaps": int(swarm.overlap_total),
         "messages": swarm.driver.messages_sent,
+        **swarm.driver.figures(),
         **_totals_against_bounds(groups, steps),
         "groups": groups,
     }

@@ -204,6 +204,10 @@ class Steering:
         """A central planner never comes to rest short of its shape: its movers keep trying."""
         return False
 
+    def figures(self) -> dict[str, Any]:
+        """Nothing beyond the messages every run reports."""
+        return {}
+
     def snapshot(self) -> dict[str, Any]:
         values = {
             "target": self.target,

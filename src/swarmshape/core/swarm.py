@@ -83,6 +83,9 @@ class Driver(Protocol):
     def quiet(self) -> bool:
         """The run has come to rest for good without forming its shape (the loop stops)."""
 
+    def figures(self) -> dict[str, Any]:
+        """What this kind of plug-in adds to a run's metrics."""
+
     def snapshot(self) -> dict[str, Any]:
         """The driver's state, as plain values."""
 

@@ -21,9 +21,13 @@ from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
 
-LOCALISED, X, Y, GOAL, WANTS, NUMBER, STAYS = range(7)
+LOCALISED, X, Y, GOAL, WANTS, NUMBER, STAYS, HOPS = range(8)
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
-it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it."""
+it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HOPS:
+hops to the nearest localised robot (0 if localised), a gradient the lost ones climb down."""
+
+FAR = 1000
+"""HOPS of a robot that hears of no localised robot at all."""
 
 PATIENCE = 4
 """Steps a robot waits behind something before it goes round it (see `_go_round`)."""
@@ -38,8 +42,8 @@ UNSET = -2
 @register
 class LocalSwap(Program):
     name = "local-swap"
-    description = "local: goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 7
+    description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
+    message_size = 8
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -70,17 +74,23 @@ class LocalSwap(Program):
         moves = _go_round(memory, preferred, first, occupied, going & sense.ready, rng)
         moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
         spare_in_shape = (memory.goal < 0) & sense.blueprint.contains(sense.group, memory.frame)
-        wander = ~memory.localised & (rng.random(len(sense)) < 0.5)
+        hops, toward = _hops(sense, memory)
+        lost = ~memory.localised
+        moves[lost] = np.where(occupied[lost, toward[lost]], 0, toward[lost])
+        wander = lost & ((moves == 0) | (hops >= FAR)) & (rng.random(len(sense)) < 0.5)
         wander |= spare_in_shape & memory.localised & (rng.random(len(sense)) < 0.1)
         moves[wander] = _random_free(occupied[wander], rng)
         stays = sense.ready & (moves == 0)
         messages = np.column_stack(
-            [memory.localised, memory.frame, memory.goal, memory.wants, sense.number, stays]
+            [memory.localised, memory.frame, memory.goal, memory.wants, sense.number, stays, hops]
         ).astype(np.int64)
         return moves, messages
 
     def finished(self, memory: Memory) -> np.ndarray:
         return memory.at_goal
+
+    def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
+        return memory.localised, memory.frame
 
 
 def localise(sense: Perception, memory: Memory) -> None:
@@ -99,6 +109,29 @@ def localise(sense: Perception, memory: Memory) -> None:
     found = first >= 0
     memory.frame[found] = (reference - cells)[first[found]]
     memory.localised |= found
+
+
+def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
+    """Each robot's hops to a localised robot (a seed counts), and the direction of its
+    neighbour nearest one (0 if none is nearer than itself)."""
+    heard_hops = np.where(
+        sense.seed, 0, np.where(sense.kin & ~sense.seed, sense.message[:, HOPS], FAR)
+    )
+    heard_hops = np.where(sense.heard & sense.kin, heard_hops, FAR)
+    if len(sense.owner) and sense.message.shape[0]:
+        heard_hops[~sense.seed & (sense.message[:, LOCALISED] == 0) & (heard_hops == 0)] = FAR
+    order = np.lexsort((heard_hops, sense.owner))
+    best = np.full(len(sense), -1, dtype=np.int64)
+    owners = sense.owner[order]
+    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
+    best[sense.owner[firsts]] = firsts
+    nearest = np.where(best >= 0, heard_hops[np.maximum(best, 0)], FAR)
+    hops = np.where(memory.localised, 0, np.minimum(nearest + 1, FAR))
+    offset = sense.offset[np.maximum(best, 0)] if len(sense.owner) else np.zeros((len(sense), 2))
+    along_x = np.abs(offset[:, 0]) >= np.abs(offset[:, 1])
+    way = np.where(along_x, np.where(offset[:, 0] > 0, 1, 2), np.where(offset[:, 1] > 0, 3, 4))
+    closer = (best >= 0) & (nearest < FAR) & (np.abs(offset).max(axis=1) >= 1.5)
+    return hops, np.where(closer, way, 0)
 
 
 def _first_per_robot(mask: np.ndarray, sense: Perception) -> np.ndarray:

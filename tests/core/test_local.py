@@ -1,0 +1,124 @@
+"""Local programs: what a robot senses, what the core does with its moves, and that nothing
+absolute leaks into a program."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from swarmshape.core.local import Memory, Program, ProgramError, Slot, _link_up
+from swarmshape.core.perception import Perception, Senses, neighbours
+from swarmshape.core.shape import Pose, Shape
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.runs import run
+from swarmshape.strategies import create
+
+
+class East(Program):
+    """Every robot tries to go east, forever, and says how far it has gone."""
+
+    name = "east"
+    description = "test: always east"
+    message_size = 1
+    memory: ClassVar[dict[str, Slot]] = {"went": Slot(np.int64, 0)}
+
+    def act(self, sense: Perception, memory: Memory, rng: np.random.Generator):
+        memory.went += sense.moved[:, 0]
+        return np.full(len(sense), 1), memory.went[:, None].copy()
+
+
+def world_of(grid: np.ndarray, agents: int, pose: Pose | None = None, arena=(20, 12)):
+    pose = pose or Pose(2, 2)
+    return build_world([GroupSpec("g", Shape(grid), (1, 2, 3), agents, pose)], arena)
+
+
+def test_neighbours_are_exactly_those_within_the_radius():
+    rng = np.random.default_rng(1)
+    cells = rng.permutation(np.argwhere(np.ones((12, 9), dtype=bool)))[:40]
+    seeds = cells[:3]
+    robots = cells[3:]
+    reach = Senses(radius=2.5).reach()
+    start, owner, other = neighbours(robots, seeds, (12, 9), reach)
+    everything = np.concatenate([robots, seeds])
+    for i, cell in enumerate(robots):
+        near = np.hypot(*(everything - cell).T)
+        expected = set(np.flatnonzero((near <= 2.5) & (near > 0)).tolist())
+        assert set(other[start[i] : start[i + 1]].tolist()) == expected
+        assert (owner[start[i] : start[i + 1]] == i).all()
+
+
+def test_a_move_into_a_taken_cell_does_not_happen_and_odometry_says_so():
+    world = world_of(np.ones((1, 3), dtype=bool), 3, arena=(12, 6))
+    start = np.array([[7, 4], [8, 4], [9, 4]])
+    swarm = Swarm(world, East(), seed=1, start=start)
+    run(swarm, max_steps=60)
+    assert swarm.overlap_total == 0
+    assert sorted(swarm.cell[:, 0].tolist()) == [9, 10, 11]  # queued against the east wall
+    assert (swarm.driver.memory.went == swarm.cell[:, 0] - start[:, 0]).all()
+
+
+def test_a_program_returning_nonsense_is_one_clear_error():
+    class Wild(East):
+        name = "wild"
+
+        def act(self, sense, memory, rng):
+            return np.full(len(sense), 9), np.zeros((len(sense), 1), dtype=np.int64)
+
+    world = world_of(np.ones((1, 3), dtype=bool), 3)
+    with pytest.raises(ProgramError, match=r"not 0 .stay. to 4"):
+        Swarm(world, Wild(), seed=1).step()
+
+
+def test_a_lost_link_is_lost_both_ways():
+    world = world_of(np.ones((3, 4), dtype=bool), 12)
+    program = create("local-swap", senses=Senses(msg_loss=0.5))
+    swarm = Swarm(world, program, seed=3)
+    sense = swarm.driver.perceive()
+    _, owner, other = neighbours(
+        swarm.cell, swarm.world.seeds, swarm.world.size, program.senses.reach()
+    )
+    heard = {(int(a), int(b)): bool(h) for a, b, h in zip(owner, other, sense.heard, strict=True)}
+    links = [(a, b) for (a, b) in heard if b < len(swarm.cell)]
+    assert links
+    assert all(heard[(a, b)] == heard[(b, a)] for a, b in links)
+    a, b = np.random.default_rng(0).integers(0, 10**6, size=(2, 20_000))
+    assert 0.48 < _link_up(a, b, salt=12345, loss=0.5).mean() < 0.52
+    assert (_link_up(a, b, 7, 0.3) == _link_up(b, a, 7, 0.3)).all()
+
+
+WALL_FREE_STEPS = 60
+"""Steps in which no robot can reach the arena's walls (at most half a cell a step, and 32 cells
+of room): walls do not move with the scenario."""
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    dx=st.integers(0, 6),
+    dy=st.integers(0, 6),
+    turns=st.integers(0, 3),
+    seed=st.integers(0, 2**16),
+    noisy=st.booleans(),
+)
+def test_a_translated_scenario_runs_the_same_translated(dx, dy, turns, seed, noisy):
+    """No absolute position leaks into a program: moving the whole scenario (shape, seeds and
+    robots) moves the run, step for step (cells moved, the rest identical)."""
+    grid = np.array([[1, 1, 1, 0], [1, 1, 1, 1], [0, 1, 1, 0]], dtype=bool)
+    senses = Senses(distance_noise=0.05, msg_loss=0.1) if noisy else Senses()
+    pose = Pose(34, 34, 90 * turns)
+    runs = []
+    for shift in ((0, 0), (dx, dy)):
+        moved = Pose(pose.x + shift[0], pose.y + shift[1], pose.rotation)
+        world = world_of(grid, 12, moved, arena=(80 + dx, 80 + dy))
+        start = np.argwhere(np.ones((3, 4), dtype=bool)) + np.array([42, 42]) + shift
+        swarm = Swarm(world, create("local-swap", senses=senses), seed=seed, start=start)
+        trail = []
+        for _ in range(WALL_FREE_STEPS):
+            swarm.step()
+            trail.append(np.column_stack([swarm.cell - shift, swarm.direction, swarm.offset]))
+        runs.append(np.array(trail))
+    assert np.array_equal(runs[0], runs[1])
