@@ -60,7 +60,7 @@ class Failure:
 
 @dataclass
 class Tally:
-    """What the cases did: how many of each kind and status, the known crashes met, and every
+    """What the cases did: how many of each kind and status, and every
     distinct failure with a pristine copy of its first case kept for a human."""
 
     seed: int
@@ -69,7 +69,6 @@ class Tally:
     keep: Path
     ran: collections.Counter = field(default_factory=collections.Counter)
     statuses: collections.Counter = field(default_factory=collections.Counter)
-    known: collections.Counter = field(default_factory=collections.Counter)
     failures: dict[tuple, Failure] = field(default_factory=dict)
 
     def add(self, number: int, case: fuzzing.Case, outcome: fuzzing.Outcome, found: list) -> None:
@@ -78,10 +77,6 @@ class Tally:
         if not found:
             return
         where = fuzzing.crash(outcome)
-        known = fuzzing.known(where)
-        if known is not None:
-            self.known[f"{known.error} (in {known.where})"] += 1
-            return
         crash = f"{where[1]} (in {where[0]})" if where else ""
         key = signature(found[0], outcome, crash, case.folder)
         if key not in self.failures:
@@ -98,8 +93,6 @@ class Tally:
             print(f"  {count:6}  {kind}")
         statuses = sorted(self.statuses.items(), key=str)
         print("exit statuses: " + ", ".join(f"{s}: {n}" for s, n in statuses))
-        for known, count in self.known.most_common():
-            print(f"known and reported: {count} cases of {known}")
         print(f"{len(self.failures)} distinct failures")
         for failure in sorted(self.failures.values(), key=lambda f: -len(f.cases)):
             kinds = ", ".join(f"{k} {n}" for k, n in failure.kinds.most_common())

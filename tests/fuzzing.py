@@ -1383,10 +1383,9 @@ def problems(
 
 
 @dataclasses.dataclass(frozen=True)
-class Known:
-    """A crash in code this branch may not change (the core, ``runs.py``, ``strategies/``,
-    ``check.py``): reported, reproduced by a strict xfail in ``tests/test_fuzz.py``, and not
-    counted as a new failure. Known by where its traceback ends and its exception."""
+class Found:
+    """A crash the fuzz found and that was fixed; ``tests/test_fuzz.py`` replays each to keep it
+    fixed. Named by where its traceback ended and its exception."""
 
     where: str
     """The source file, under ``src/swarmshape/``."""
@@ -1399,19 +1398,19 @@ class Known:
 
 
 RESUME = ("--load-state", "fuzz.state", "--headless", "--max-steps", "8")
-KNOWN = (
-    Known("strategies/__init__.py", "ValueError: Empty module name", ("check", ":B")),
-    Known("strategies/__init__.py", "TypeError: the 'package' argument is required",
+FOUND = (
+    Found("strategies/__init__.py", "ValueError: Empty module name", ("check", ":B")),
+    Found("strategies/__init__.py", "TypeError: the 'package' argument is required",
           ("shape.png", "--strategy", ".x:Y", "--headless")),
-    Known("strategies/__init__.py", "OSError: [Errno 36] File name too long",
+    Found("strategies/__init__.py", "OSError: [Errno 36] File name too long",
           ("shape.png", "--strategy", "x" * 300 + ".py:X", "--headless")),
-    Known("check.py", "AttributeError: type object 'Strategy' has no attribute 'name'",
+    Found("check.py", "AttributeError: type object 'Strategy' has no attribute 'name'",
           ("check", "swarmshape:Strategy")),
-    Known("core/steering.py", "AttributeError: 'Strategy' object has no attribute 'name'",
+    Found("core/steering.py", "AttributeError: 'Strategy' object has no attribute 'name'",
           ("shape.png", "--strategy", "swarmshape:Strategy", "--headless")),
-    Known("core/motion.py", "TypeError: '<=' not supported between instances of 'float' and",
+    Found("core/motion.py", "TypeError: '<=' not supported between instances of 'float' and",
           RESUME, {"config.max_speed": None}),
-    Known("strategies/paper.py", "TypeError: len() of unsized object", RESUME,
+    Found("strategies/paper.py", "TypeError: len() of unsized object", RESUME,
           {"swarm.driver.strategy._sequence.0": np.array(3)}),
 )  # fmt: skip
 
@@ -1433,14 +1432,6 @@ def crash(outcome: Outcome) -> tuple[str, str] | None:
     sources = SOURCE.findall(text)
     lines = text.strip().splitlines()
     return (sources[-1] if sources else "?", lines[-1] if lines else "")
-
-
-def known(where: tuple[str, str] | None) -> Known | None:
-    """The `Known` crash that `crash` found, if it is one."""
-    if where is None:
-        return None
-    matches = [k for k in KNOWN if where[0] == k.where and where[1].startswith(k.error)]
-    return matches[0] if matches else None
 
 
 def first_error_line(outcome: Outcome) -> str:

@@ -49,15 +49,14 @@ def examples(share: int) -> settings:
 
 
 def holds(material: Path, data: st.DataObject, kind: str, *, isolated: bool = False) -> None:
-    """Draw a case of `kind`, run it, and fail with its problems and how to run it again
-    (unless it is a crash already reported, see `fuzzing.KNOWN`)."""
+    """Draw a case of `kind`, run it, and fail with its problems and how to run it again."""
     base = Path(tempfile.mkdtemp(prefix="fuzz-"))
     try:
         case = fuzzing.make_case(Data(data), kind, material, base / "case", isolated)
         runner = fuzzing.run_forked if case.isolated else fuzzing.run_here
         outcome, problems = fuzzing.attempt(case, runner)
         where = fuzzing.crash(outcome)
-        assert not problems or fuzzing.known(where), (
+        assert not problems, (
             f"{'; '.join(problems)}\n{case.command()}\nexit status {outcome.status}\n"
             f"stderr: {outcome.stderr}" + (f"crash: {where[1]} in {where[0]}" if where else "")
         )
@@ -143,19 +142,15 @@ def test_pipes_and_devices_are_refused_not_read(material, data):
     holds(material, data, "pipe or device", isolated=True)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a crash in the core, runs.py, strategies/ or check.py, which this branch may not "
-    "change; reported. Once it passes, its entry in fuzzing.KNOWN can go",
-)
-@pytest.mark.parametrize("crash", fuzzing.KNOWN, ids=lambda known: f"{known.where} {known.error}")
-def test_crashes_known_and_reported(material, tmp_path, crash):
+@pytest.mark.parametrize("crash", fuzzing.FOUND, ids=lambda found: f"{found.where} {found.error}")
+def test_crashes_the_fuzz_found_stay_fixed(material, tmp_path, crash):
+    """Each crash the fuzz once found is now one clear line (a regression test per crash)."""
     folder = tmp_path / "case"
     shutil.copytree(material, folder)
     if crash.state is not None:
         state = fuzzing.changed_state(folder / "paper.state", crash.state)
         (folder / "fuzz.state").write_bytes(state)
-    case = fuzzing.Case("known", list(crash.argv), folder, False)
+    case = fuzzing.Case("found", list(crash.argv), folder, False)
     outcome, problems = fuzzing.attempt(case, fuzzing.run_here)
-    assert fuzzing.known(fuzzing.crash(outcome)) is None, "it still crashes as reported"
+    assert fuzzing.crash(outcome) is None, "it crashes again"
     assert not problems, outcome.stderr

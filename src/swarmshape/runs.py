@@ -109,6 +109,10 @@ class RunConfig:
         unknown = sorted(set(values) - set(KINDS))
         if unknown:
             raise InputError(f"{source}: unknown run setting {unknown[0]!r}")
+        unset = sorted(name for name, value in values.items() if value is None)
+        unset = [name for name in unset if name not in NULLABLE]
+        if unset:
+            raise InputError(f"{source}: {unset[0]} must have a value, got none")
         checked = {
             name: _typed(value, KINDS[name], f"{source}: {name}") for name, value in values.items()
         }
@@ -122,6 +126,9 @@ class RunConfig:
 
 
 FITS = (None, "agents")
+
+NULLABLE = {field.name for field in dataclasses.fields(RunConfig) if field.default is None}
+"""Settings that may be None (unset); for the others None is a damaged value."""
 
 KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
          "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,

@@ -65,6 +65,8 @@ def get(name: str) -> Plugin:
         raise InputError(
             f"strategy {name!r} is not a subclass of swarmshape.Strategy or swarmshape.Program"
         )
+    if not isinstance(getattr(cls, "name", None), str):
+        raise InputError(f"strategy {name!r} has no name; a plug-in class sets name = '...'")
     return cls
 
 
@@ -83,7 +85,7 @@ def _import(spec: str) -> Plugin:
     else:
         try:
             module = importlib.import_module(module_name)
-        except ImportError as error:
+        except (ImportError, ValueError, TypeError) as error:  # also "" and ".relative"
             raise InputError(f"strategy {spec!r}: cannot import {module_name} ({error})") from None
     try:
         return getattr(module, attribute)
@@ -93,7 +95,11 @@ def _import(spec: str) -> Plugin:
 
 def _load_file(path: Path, spec: str) -> ModuleType:
     """Run a strategy file the user named, as a module of its own."""
-    if not path.is_file():
+    try:
+        is_file = path.is_file()
+    except OSError as error:  # a name too long to look up, say
+        raise InputError(f"strategy {spec!r}: cannot read {path} ({error.strerror})") from None
+    if not is_file:
         raise InputError(f"strategy {spec!r}: no such file {path}")
     name = f"swarmshape_strategy_{path.stem}"
     found = importlib.util.spec_from_file_location(name, path)

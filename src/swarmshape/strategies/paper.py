@@ -66,6 +66,8 @@ class Paper(Strategy):
         if len(self._sequence) != groups or len(self._next) != groups:
             raise saved.error("_sequence", f"does not have one order per group ({groups})")
         for sequence, done in zip(self._sequence, self._next, strict=True):
+            if not isinstance(sequence, np.ndarray) or sequence.ndim != 1:
+                raise saved.error("_sequence", "holds something other than lists of targets")
             in_range = sequence.dtype.kind == "i" and ((sequence >= 0) & (sequence < targets)).all()
             counted = type(done) is int and 0 <= done <= len(sequence)
             if sequence.ndim != 1 or not in_range or not counted:
