@@ -1,7 +1,9 @@
 """Draw the shipped shapes in shapes/ with Pillow (run once; the PNGs are committed).
 
 The paper's three shapes are drawn one pixel per cell, so they load exactly as drawn. The
-richer ones are drawn large and smooth, so loading them also exercises downscaling.
+richer ones are drawn large and smooth, so loading them also exercises downscaling. The horse
+is scikit-image's public-domain silhouette (`skimage.data.horse`), a photo-like outline for the
+benchmark; scikit-image is needed only to draw it (`pip install scikit-image`), never to run.
 """
 
 from __future__ import annotations
@@ -9,6 +11,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 from PIL import Image, ImageDraw
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
@@ -61,6 +64,15 @@ def letter_s(size: int = 512) -> Image.Image:
     return image
 
 
+def horse() -> Image.Image | None:
+    """The horse silhouette, black on white, or None without scikit-image."""
+    try:
+        from skimage import data
+    except ImportError:
+        return None
+    return Image.fromarray(np.where(data.horse(), PAPER, INK).astype(np.uint8))
+
+
 def main() -> None:
     SHAPES.mkdir(exist_ok=True)
     cells(16, 1, [(0, 0, 15, 0)]).save(SHAPES / "line.png")
@@ -72,6 +84,12 @@ def main() -> None:
     star().save(SHAPES / "star.png")
     ring().save(SHAPES / "ring.png")
     letter_s().save(SHAPES / "letter-s.png")
+    cells(50, 20, [(0, 0, 49, 19)]).save(SHAPES / "block.png")
+    silhouette = horse()
+    if silhouette is None:
+        print("scikit-image is not installed: shapes/horse.png left as it is")
+    else:
+        silhouette.save(SHAPES / "horse.png")
 
 
 if __name__ == "__main__":

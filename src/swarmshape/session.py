@@ -203,13 +203,20 @@ def summary_line(metrics: dict[str, Any]) -> str:
         else f"not formed after {_count(metrics['steps_run'], 'step')}"
     )
     ratio = metrics["makespan_ratio"]
-    versus = "" if ratio is None else f", {ratio:.2f}x the makespan lower bound"
+    versus = "" if ratio is None else f", {ratio:.2f}x the makespan lower bound ({_how(metrics)})"
     return (
         f"{metrics['shape']}: {metrics['strategy']}, {_count(metrics['agents'], 'robot')}, "
         f"{_count(metrics['targets'], 'target')}, scale {metrics['scale']:.2f}: {formed}, "
         f"coverage {100 * metrics['coverage']:.1f}%, iou {metrics['iou']:.3f}, "
         f"{_count(metrics['overlaps'], 'overlap')}, seed {metrics['seed']}{versus}"
     )
+
+
+def _how(metrics: dict[str, Any]) -> str:
+    """Whether the makespan bound is the optimum or only a bound, and which."""
+    if metrics["makespan_bound_exact"]:
+        return "exact"
+    return f"{metrics['makespan_bound_method']} bound, not proved exact"
 
 
 def _count(number: int, thing: str) -> str:

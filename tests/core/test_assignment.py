@@ -62,25 +62,6 @@ def test_greedy_matches_the_closest_pair_first_and_beats_random():
     assert np.linalg.norm(a[chosen] - t, axis=1).sum() < random_total
 
 
-def test_lower_bounds_match_brute_force():
-    a, t, _ = scene(6, 4, seed=5)
-    cost = cdist(t, a, "cityblock")
-    options = [np.array(p) for p in itertools.permutations(range(6), 4)]
-    longest, total, exact = assignment.manhattan_lower_bounds(a, t)
-    assert exact
-    assert longest == min(cost[np.arange(4), p].max() for p in options)
-    assert total == min(cost[np.arange(4), p].sum() for p in options)
-
-
-def test_relaxed_lower_bounds_stay_below_the_exact_ones(monkeypatch):
-    a, t, _ = scene(40, 30)
-    longest, total, _ = assignment.manhattan_lower_bounds(a, t)
-    monkeypatch.setattr(assignment, "EXACT_LIMIT", 0)
-    loose_longest, loose_total, exact = assignment.manhattan_lower_bounds(a, t)
-    assert not exact
-    assert loose_longest <= longest and loose_total <= total
-
-
 @pytest.mark.parametrize("strategy", ["optimal", "greedy", "random", "paper"])
 def test_runs_never_beat_their_lower_bounds(strategy):
     swarm = make_swarm(grid_from("####\n#..#\n####"), seed=4, strategy=strategy)

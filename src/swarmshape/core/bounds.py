@@ -15,7 +15,6 @@ method produced it, so reports never present a bound as an optimum.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -47,7 +46,17 @@ DENSE_PAIRS = 10_000_000
 FLOW_SECONDS = 5e-9
 """scipy's max flow on the threshold network takes about this times arcs ** 1.4 seconds here
 (0.5 s for 5e5 arcs at 10,000 robots, 13.5 s for 5.4e6 at 100,000), and the network has
-about 7 arcs per hub; `bottleneck_bound` skips flows that would overrun its time budget."""
+about 7 arcs per hub; `bottleneck_bound` skips flows that would overrun its time budget.
+
+Budgets are counted in these estimated seconds, never on the clock, so a bound and the method
+it reports depend on the instance only, not on how busy the machine is."""
+
+PAIR_SECONDS = 1e-7
+"""One dense matching step of `distance_bound`'s ascent takes at most about this per
+robot-target pair here (40 to 100 ns measured from 500 to 3,000 robots)."""
+
+CELL_SECONDS = 2e-8
+"""One distance transform of `_start_potential` takes about this per cell of its box."""
 
 TOUCH = 1.0 - 1e-9
 """As in the simulator: a robot this close to a cell centre has arrived there."""
@@ -90,23 +99,24 @@ def bottleneck_bound(
     Garfinkel 1971): a max flow decides whether all targets can be matched within ``d``,
     on a network of linear size instead of the dense pair graph (see `_threshold_network`).
     A feasible ``d`` equal to the lower bound proves it exact; an infeasible one raises the
-    bound. When the next flow would not fit in ``budget_seconds``, the bound found so far is
-    returned, never the nearest-robot bound alone.
+    bound. When the next flow would not fit in ``budget_seconds`` (estimated from the network's
+    size, see `FLOW_SECONDS`), the bound found so far is returned, never the nearest-robot
+    bound alone.
     """
     starts, targets = _cells(starts), _cells(targets)
     _check_counts(starts, targets)
     if len(targets) == 0:
         return Bound(0.0, "exact", True)
-    deadline = time.perf_counter() + budget_seconds
     lower = _hall_bound(starts, targets)
     method = "hall"
     feasible_at: int | None = None
     probe, gap = lower, 1
+    cost, spent = _flow_seconds(starts, targets), 0.0
     while feasible_at is None or lower < feasible_at:
-        network = _threshold_network(starts, targets, probe, deadline)
-        if network is None:
+        spent += cost
+        if spent > budget_seconds:
             return Bound(float(lower), method, False)
-        graph, source, sink = network
+        graph, source, sink = _threshold_network(starts, targets, probe)
         if maximum_flow(graph, source, sink, method="dinic").flow_value == len(targets):
             feasible_at = probe
         else:
@@ -221,9 +231,17 @@ def _best_within(src: np.ndarray, values: np.ndarray, dst: np.ndarray, d: int) -
     return out
 
 
+def _flow_seconds(starts: np.ndarray, targets: np.ndarray) -> float:
+    """Estimated seconds of one max flow on `_threshold_network` (the same for every ``d``)."""
+    u_r, v_r = np.unique(starts.sum(axis=1)), np.unique(starts[:, 0] - starts[:, 1])
+    u_t, v_t = np.unique(targets.sum(axis=1)), np.unique(targets[:, 0] - targets[:, 1])
+    hubs = min(len(u_t) * len(v_r), len(v_t) * len(u_r))
+    return FLOW_SECONDS * (7 * hubs) ** 1.4  # measured 5.6 to 6.8 arcs per hub before pruning
+
+
 def _threshold_network(
-    starts: np.ndarray, targets: np.ndarray, d: int, deadline: float = np.inf
-) -> tuple[csr_matrix, int, int] | None:
+    starts: np.ndarray, targets: np.ndarray, d: int
+) -> tuple[csr_matrix, int, int]:
     """A flow network whose max flow is the largest matching of pairs within distance `d`.
 
     The pair graph is dense (each target sees thousands of robots), so it is never built. In
@@ -231,17 +249,13 @@ def _threshold_network(
     goes along its ``v`` line to a hub ``(u', v)`` whose ``u'`` is some target's ``u``, then
     along that ``u'`` column to the target. Each leg reaches a window of receivers on a line,
     which a sparse table or a segment tree over the receivers covers (`_fan_out`). Robots and
-    targets carry capacity 1, everything else is unbounded. ``None`` when the flow would
-    probably not finish by `deadline`.
+    targets carry capacity 1, everything else is unbounded.
     """
     u_r, v_r = starts.sum(axis=1), starts[:, 0] - starts[:, 1]
     u_t, v_t = targets.sum(axis=1), targets[:, 0] - targets[:, 1]
     if len(np.unique(v_t)) * len(np.unique(u_r)) < len(np.unique(u_t)) * len(np.unique(v_r)):
         u_r, v_r, u_t, v_t = v_r, u_r, v_t, u_t  # the mirror image y -> -y swaps u and v
     hub_u, hub_v = np.unique(u_t), np.unique(v_r)
-    arcs = 7 * len(hub_u) * len(hub_v)  # measured 5.6 to 6.8 per hub before pruning
-    if time.perf_counter() + FLOW_SECONDS * arcs**1.4 > deadline:
-        return None
     # leg 1 runs along lines v (robots' v values), leg 2 along columns u' (targets' u values)
     u0, v0 = min(u_r.min(), u_t.min()), min(v_r.min(), v_t.min())
     stride_u = int(max(u_r.max(), u_t.max()) - u0) + 2 * d + 2  # windows never cross lines
@@ -387,18 +401,20 @@ def distance_bound(
     potentials of the optimal 1-D transports of the x and y marginals: O(n log n), and within
     0.01 % of the optimum on large filled discs (`_start_potential`). Up to `DENSE_PAIRS`
     pairs, steepest ascent then closes the gap and proves optimality (`_steepest_ascent`);
-    above, or when `budget_seconds` run out, the value is a bound and says so.
+    above, or when `budget_seconds` run out (estimated from the instance's size, see
+    `PAIR_SECONDS` and `CELL_SECONDS`), the value is a bound and says so.
     """
     starts, targets = _cells(starts), _cells(targets)
     _check_counts(starts, targets)
     if len(targets) == 0:
         return Bound(0.0, "exact", True)
-    deadline = time.perf_counter() + budget_seconds
-    phi_r, phi_t = _start_potential(starts, targets, deadline)
+    phi_r, phi_t = _start_potential(starts, targets, budget_seconds / 2)
     start = _dual_value(phi_r, phi_t)
-    if len(starts) * len(targets) > DENSE_PAIRS:
+    pairs = len(starts) * len(targets)
+    if pairs > DENSE_PAIRS:
         return Bound(float(start), "dual", False)
-    phi_r, phi_t, optimal = _steepest_ascent(starts, targets, phi_r, phi_t, deadline)
+    matchings = budget_seconds / (PAIR_SECONDS * pairs)
+    phi_r, phi_t, optimal = _steepest_ascent(starts, targets, phi_r, phi_t, matchings)
     value = _dual_value(phi_r, phi_t)
     if optimal:
         return Bound(float(value), "exact", True)
@@ -406,7 +422,7 @@ def distance_bound(
 
 
 def _start_potential(
-    starts: np.ndarray, targets: np.ndarray, deadline: float
+    starts: np.ndarray, targets: np.ndarray, budget_seconds: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """The best of a few cheap potentials, each 1-Lipschitz in L1 and so each a valid dual.
 
@@ -431,8 +447,9 @@ def _start_potential(
         if frame.cells <= GRID_LIMIT:
             depth = ndimage.distance_transform_cdt(frame.mask(targets), metric="taxicab")
             depth = frame.at(depth, targets)
-            core = 1
-            while core <= depth.max() and time.perf_counter() < deadline:
+            core, transforms = 1, budget_seconds / (CELL_SECONDS * frame.cells)
+            while core <= depth.max() and transforms >= 1:
+                transforms -= 1
                 inward = frame.distance_to(targets[depth >= core])
                 candidates.append((-frame.at(inward, starts), -frame.at(inward, targets)))
                 core *= 2
@@ -471,7 +488,7 @@ def _steepest_ascent(
     targets: np.ndarray,
     phi_r: np.ndarray,
     phi_t: np.ndarray,
-    deadline: float,
+    matchings: float,
 ) -> tuple[np.ndarray, np.ndarray, bool]:
     """Raise or lower the potentials by one on an improving set until none is left.
 
@@ -484,8 +501,8 @@ def _steepest_ascent(
     raise gains the deficiency of the tight graph between targets and robots with ``phi >= 0``,
     the best lowering that between robots with ``phi >= 1`` and targets: maximum matchings
     (Hopcroft and Karp 1973), whose unmatched vertices' alternating paths reach the set (Konig
-    1931), as in the Hungarian method (Kuhn 1955). Returns the potentials and whether they
-    are proved optimal: neither direction improves.
+    1931), as in the Hungarian method (Kuhn 1955). At most `matchings` matchings are solved.
+    Returns the potentials and whether they are proved optimal: neither direction improves.
     """
     n, m = len(starts), len(targets)
     shift = -np.partition(phi_r, n - m)[n - m]
@@ -494,9 +511,12 @@ def _steepest_ascent(
         starts[:, None, 1] - targets[None, :, 1]
     )
     directions = ["raise", "lower"]
-    while time.perf_counter() < deadline:
+    while True:
         tight = (phi_t[None, :] - phi_r[:, None]) == distance  # robots x targets
         for direction in directions:
+            if matchings < 1:
+                return phi_r, phi_t, False
+            matchings -= 1
             if direction == "raise":  # targets up, with robots downhill of them
                 chosen, gain = _deficient_set(tight[phi_r >= 0], from_targets=True)
                 if gain:
@@ -515,7 +535,6 @@ def _steepest_ascent(
                 break
         else:
             return phi_r, phi_t, True
-    return phi_r, phi_t, False
 
 
 def _deficient_set(adjacency: np.ndarray, *, from_targets: bool) -> tuple[np.ndarray, int]:
