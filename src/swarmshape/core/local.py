@@ -151,7 +151,7 @@ class LocalControl:
 
     def figures(self) -> dict[str, Any]:
         """Messages lost, and how far robots' own position estimates are off (cells)."""
-        figures: dict[str, Any] = {"messages_lost": self.lost, "localisation_error": None}
+        figures: dict[str, Any] = {"messages_lost": self.lost}
         estimate = self.program.estimate(self.memory)
         if estimate is not None and estimate[0].any():
             localised, frame = estimate
@@ -160,11 +160,9 @@ class LocalControl:
                 mine = self.swarm.group == group
                 truth[mine] = g.pose.to_frame(self.swarm.cell[mine])
             error = np.hypot(*(frame[localised] - truth[localised]).T)
-            figures["localisation_error"] = {
-                "mean": round(float(error.mean()), 4),
-                "max": round(float(error.max()), 4),
-                "localised": int(localised.sum()),
-            }
+            figures["localisation_error_mean"] = round(float(error.mean()), 4)
+            figures["localisation_error_max"] = round(float(error.max()), 4)
+            figures["localised"] = int(localised.sum())
         return figures
 
     def index_world(self) -> None:

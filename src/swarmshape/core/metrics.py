@@ -108,6 +108,16 @@ def _iou(targets: np.ndarray, occupied: np.ndarray) -> float:
     return len(target_set & occupied_set) / len(target_set | occupied_set)
 
 
+LOCAL_FIGURES = {
+    "messages_lost": 0,
+    "localisation_error_mean": None,
+    "localisation_error_max": None,
+    "localised": None,
+}
+"""What local programs add to the metrics (these values for a central strategy), so that every
+run's metrics have the same fields."""
+
+
 def run_metrics(swarm: Swarm) -> dict[str, Any]:
     """The metrics file's content: the run's identity, totals, and the same per group."""
     groups = [group_metrics(swarm, g) for g in range(len(swarm.world.groups))]
@@ -128,6 +138,7 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
         "total_distance": round(float(swarm.distance.sum()), DIGITS),
         "overlaps": int(swarm.overlap_total),
         "messages": swarm.driver.messages_sent,
+        **LOCAL_FIGURES,
         **swarm.driver.figures(),
         **_totals_against_bounds(groups, steps),
         "groups": groups,

@@ -118,19 +118,21 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
         sense.seed, 0, np.where(sense.kin & ~sense.seed, sense.message[:, HOPS], FAR)
     )
     heard_hops = np.where(sense.heard & sense.kin, heard_hops, FAR)
-    if len(sense.owner) and sense.message.shape[0]:
-        heard_hops[~sense.seed & (sense.message[:, LOCALISED] == 0) & (heard_hops == 0)] = FAR
+    heard_hops[~sense.seed & (sense.message[:, LOCALISED] == 0) & (heard_hops == 0)] = FAR
     order = np.lexsort((heard_hops, sense.owner))
     best = np.full(len(sense), -1, dtype=np.int64)
     owners = sense.owner[order]
     firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
     best[sense.owner[firsts]] = firsts
-    nearest = np.where(best >= 0, heard_hops[np.maximum(best, 0)], FAR)
+    found = best >= 0
+    nearest = np.full(len(sense), FAR, dtype=np.int64)
+    nearest[found] = heard_hops[best[found]]
     hops = np.where(memory.localised, 0, np.minimum(nearest + 1, FAR))
-    offset = sense.offset[np.maximum(best, 0)] if len(sense.owner) else np.zeros((len(sense), 2))
+    offset = np.zeros((len(sense), 2))
+    offset[found] = sense.offset[best[found]]
     along_x = np.abs(offset[:, 0]) >= np.abs(offset[:, 1])
     way = np.where(along_x, np.where(offset[:, 0] > 0, 1, 2), np.where(offset[:, 1] > 0, 3, 4))
-    closer = (best >= 0) & (nearest < FAR) & (np.abs(offset).max(axis=1) >= 1.5)
+    closer = found & (nearest < FAR) & (np.abs(offset).max(axis=1) >= 1.5)
     return hops, np.where(closer, way, 0)
 
 
