@@ -16,7 +16,6 @@ from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import run
-from swarmshape.strategies import create
 
 
 class East(Program):
@@ -30,6 +29,27 @@ class East(Program):
     def act(self, sense: Perception, memory: Memory, rng: np.random.Generator):
         memory.went += sense.moved[:, 0]
         return np.full(len(sense), 1), memory.went[:, None].copy()
+
+
+class Drift(Program):
+    """Robots step away from their nearest neighbour, tell how many they sense, and sometimes
+    step at random: a program that uses offsets, messages and the generator."""
+
+    name = "drift"
+    description = "test: spread out"
+    message_size = 1
+
+    def act(self, sense: Perception, memory: Memory, rng: np.random.Generator):
+        count = np.bincount(sense.owner, minlength=len(sense))
+        away = np.zeros((len(sense), 2))
+        np.add.at(away, sense.owner, -sense.offset * (sense.message[:, :1] + 1))
+        along_x = np.abs(away[:, 0]) >= np.abs(away[:, 1])
+        x_way, y_way = np.where(away[:, 0] > 0, 1, 2), np.where(away[:, 1] > 0, 3, 4)
+        moves = np.where(along_x, x_way, y_way)
+        moves[count == 0] = 0
+        jump = rng.random(len(sense)) < 0.2
+        moves[jump] = rng.integers(0, 5, jump.sum())
+        return moves, count[:, None]
 
 
 def world_of(grid: np.ndarray, agents: int, pose: Pose | None = None, arena=(20, 12)):
@@ -76,7 +96,7 @@ def test_a_program_returning_nonsense_is_one_clear_error():
 
 def test_a_lost_link_is_lost_both_ways():
     world = world_of(np.ones((3, 4), dtype=bool), 12)
-    program = create("local-swap", senses=Senses(msg_loss=0.5))
+    program = Drift(Senses(msg_loss=0.5))
     swarm = Swarm(world, program, seed=3)
     sense = swarm.driver.perceive()
     _, owner, other = neighbours(
@@ -115,7 +135,7 @@ def test_a_translated_scenario_runs_the_same_translated(dx, dy, turns, seed, noi
         moved = Pose(pose.x + shift[0], pose.y + shift[1], pose.rotation)
         world = world_of(grid, 12, moved, arena=(80 + dx, 80 + dy))
         start = np.argwhere(np.ones((3, 4), dtype=bool)) + np.array([42, 42]) + shift
-        swarm = Swarm(world, create("local-swap", senses=senses), seed=seed, start=start)
+        swarm = Swarm(world, Drift(senses), seed=seed, start=start)
         trail = []
         for _ in range(WALL_FREE_STEPS):
             swarm.step()
