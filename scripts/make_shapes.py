@@ -73,6 +73,26 @@ def horse() -> Image.Image | None:
     return Image.fromarray(np.where(data.horse(), PAPER, INK).astype(np.uint8))
 
 
+def letter_k(height: int = 44) -> Image.Image:
+    """A block letter K of about a thousand cells, one pixel per cell and hole-free: the
+    shape of Rubenstein, Cornejo and Nagpal's thousand-Kilobot self-assembly (Science 2014)."""
+    width, stem = height * 3 // 4, height // 4
+    image = Image.new("L", (width, height), PAPER)
+    draw = ImageDraw.Draw(image)
+    draw.rectangle((0, 0, stem - 1, height - 1), fill=INK)
+    middle, arm = height // 2, stem + 1
+    draw.polygon(
+        [(stem - 1, middle - arm), (width - arm, 0), (width - 1, 0), (stem - 1, middle + arm // 2)],
+        fill=INK,
+    )
+    draw.polygon(
+        [(stem - 1, middle - arm // 2), (width - 1, height - 1), (width - arm, height - 1),
+         (stem - 1, middle + arm)],
+        fill=INK,
+    )  # fmt: skip
+    return image
+
+
 def main() -> None:
     SHAPES.mkdir(exist_ok=True)
     cells(16, 1, [(0, 0, 15, 0)]).save(SHAPES / "line.png")
@@ -90,6 +110,7 @@ def main() -> None:
         print("scikit-image is not installed: shapes/horse.png left as it is")
     else:
         silhouette.save(SHAPES / "horse.png")
+    letter_k().save(SHAPES / "letter-k.png")
 
 
 if __name__ == "__main__":

@@ -18,6 +18,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
+from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError
 from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume
 from swarmshape.session import Outputs, Session, preview_text
@@ -192,7 +193,11 @@ def _shared_options() -> argparse.ArgumentParser:
         "1 - P (default 0)",
     )
     sim.add_argument(
-        "--start", type=Path, help="CSV of start cells (columns x,y, one row per robot)"
+        "--start",
+        type=_start,
+        help="where robots start: packed (a block against the seeds, as in the Kilobot "
+        "self-assembly experiments), scatter (random free cells, the default), or a CSV of "
+        "start cells (columns x,y, one row per robot)",
     )
     sim.add_argument(
         "--load-state", type=Path, help="resume a run saved with --save-state (PATH not needed)"
@@ -233,6 +238,17 @@ def _size(text: str) -> tuple[int, int]:
             f"expected WIDTHxHEIGHT, e.g. 60x40, got {text!r}"
         ) from None
     return width, height
+
+
+def _start(text: str) -> str | Path:
+    """A start layout by name, or a CSV of start cells."""
+    if text in START_LAYOUTS:
+        return text
+    if Path(text).suffix.lower() == ".csv" or Path(text).exists():
+        return Path(text)
+    raise argparse.ArgumentTypeError(
+        f"expected {', '.join(START_LAYOUTS)} or a CSV file of start cells, got {text!r}"
+    )
 
 
 def _version() -> str:

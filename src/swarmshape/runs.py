@@ -24,11 +24,12 @@ from typing import Any
 import numpy as np
 
 from swarmshape import strategies
+from swarmshape.core.grid import has_hole
 from swarmshape.core.motion import Limits
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.swarm import Params, Swarm
-from swarmshape.core.world import World, build_world
+from swarmshape.core.world import START_LAYOUTS, World, build_world, packed_start
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import DEFAULT_THRESHOLD, ShapeWarning
 from swarmshape.io.checkpoint import load_state, save_state
@@ -61,8 +62,9 @@ class RunConfig:
     max_speed: float = Limits.max_speed
     max_accel: float = Limits.max_accel
     max_steps: int = 500_000
-    start: Path | None = None
-    """A CSV of start cells (columns x,y); None draws random free cells."""
+    start: Path | str | None = None
+    """Where robots start: ``"packed"`` (a block against the seeds), ``"scatter"`` (random free
+    cells, as None), or a CSV of start cells (columns x,y)."""
     fit: str | None = None
     """"agents": size the shape to the robots (as many cells as there are robots, or fewer)."""
     speed_variation: float = 0.0
@@ -83,6 +85,10 @@ class RunConfig:
             raise InputError(f"unknown --fit {self.fit!r}; choose {', '.join(map(str, FITS[1:]))}")
         if self.fit == "agents" and self.agents is None:
             raise InputError("--fit agents sizes the shape to --agents N; give that number")
+        if isinstance(self.start, str) and self.start not in START_LAYOUTS:
+            raise InputError(
+                f"unknown --start {self.start!r}; choose {', '.join(START_LAYOUTS)} or a CSV file"
+            )
         Limits(self.max_speed, self.max_accel)  # checks them
         Params(speed_variation=self.speed_variation)
         self.senses()
@@ -141,6 +147,8 @@ def _typed(value: Any, kind: type, where: str) -> Any:
     """`value` as `kind`, or a one-line error: plain values may come from any file."""
     if value is None:
         return None
+    if kind is Path and isinstance(value, str) and value in START_LAYOUTS:
+        return value
     if kind is Path and isinstance(value, str | Path):
         return Path(value)
     if kind is tuple:
@@ -193,7 +201,8 @@ def load_world(config: RunConfig) -> World:
         if len(specs) > 1:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
         specs[0] = dataclasses.replace(specs[0], agents=config.agents)
-    world = build_world(specs, config.arena or scenario.arena, scenario.name)
+    packed = config.start == "packed"
+    world = build_world(specs, config.arena or scenario.arena, scenario.name, packed)
     cells = len(world.targets)
     if world.agents > 1.5 * cells and config.fit is None:
         warnings.warn(
@@ -202,14 +211,32 @@ def load_world(config: RunConfig) -> World:
             ShapeWarning,
             stacklevel=2,
         )
+    if strategies.is_code(config.strategy) or config.strategy != "self-assembly":
+        return world
+    for group in world.groups:
+        if has_hole(group.shape.grid):
+            warnings.warn(
+                f"shape {group.name!r} has a hole, and self-assembly cannot form holes (robots "
+                "join the edge of what is built, so a hole is filled or left outside)",
+                ShapeWarning,
+                stacklevel=2,
+            )
     return world
 
 
 def build(config: RunConfig) -> Swarm:
     """A swarm ready for its first step."""
     world = load_world(config)
-    start = None if config.start is None else read_start_cells(config.start, world)
-    return start_swarm(config, world, start)
+    return start_swarm(config, world, start_cells(config, world))
+
+
+def start_cells(config: RunConfig, world: World) -> np.ndarray | None:
+    """The start cells `config` asks for on `world` (None: random free cells)."""
+    if config.start == "packed":
+        return packed_start(world)
+    if config.start is None or config.start == "scatter":
+        return None
+    return read_start_cells(Path(config.start), world)
 
 
 def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None) -> Swarm:

@@ -24,8 +24,17 @@ from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
 from swarmshape.io.files import check_output, distinct_outputs, write_text
-from swarmshape.io.scenario import PALETTE, parse_colour, read_start_cells
-from swarmshape.runs import Observer, RunConfig, Runner, load_world, resume, save, start_swarm
+from swarmshape.io.scenario import PALETTE, parse_colour
+from swarmshape.runs import (
+    Observer,
+    RunConfig,
+    Runner,
+    load_world,
+    resume,
+    save,
+    start_cells,
+    start_swarm,
+)
 
 OUTPUT_OPTIONS = ("metrics", "record", "frames", "trace", "save_state", "positions")
 
@@ -131,7 +140,7 @@ class Session:
             )
             return config, world, lambda painted: start_swarm(config, painted)
         world = load_world(config)
-        start = None if config.start is None else read_start_cells(config.start, world)
+        start = start_cells(config, world)
         return config, world, lambda new: start_swarm(config, new, start if new is world else None)
 
     def _show(

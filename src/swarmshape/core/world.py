@@ -6,6 +6,7 @@ World cells are integer ``(x, y)``, y growing downward; grids over the arena are
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -26,6 +27,11 @@ ASPECT = 1.6
 """Automatic arenas are at least this much wider than tall, to fill a landscape window."""
 
 GROUP_GAP = 4
+
+START_LAYOUTS = ("packed", "scatter")
+"""Start layouts by name: ``packed`` puts each group's robots in a block against its seeds, on
+the side away from its shape (as in the Kilobot self-assembly experiments); ``scatter`` draws
+random free cells (the default)."""
 
 MAX_AGENTS = 1_000_000
 MAX_ARENA_CELLS = 25_000_000
@@ -59,6 +65,15 @@ class Group:
     frame_cells: np.ndarray
     targets: np.ndarray
     seeds: np.ndarray
+
+    def packed(self) -> np.ndarray:
+        """World cells ``(agents, 2)`` of a block of this group's robots packed against its
+        seeds: a near-square block above the seed L in the seed frame (rows ``y <= -2``, its
+        right column at ``x = 1``), filled from the row touching the seeds outward."""
+        width = max(1, math.ceil(math.sqrt(self.agents)))
+        k = np.arange(self.agents)
+        frame = np.column_stack([1 - k % width, -2 - k // width])
+        return self.pose.to_world(frame)
 
     @classmethod
     def placed(
@@ -189,17 +204,41 @@ def blank_world(
 
 
 def build_world(
-    specs: list[GroupSpec], arena: tuple[int, int] | None = None, name: str = "swarm"
+    specs: list[GroupSpec],
+    arena: tuple[int, int] | None = None,
+    name: str = "swarm",
+    packed: bool = False,
 ) -> World:
-    """Fit every group's shape to its agents, place it, and size the arena if not given."""
+    """Fit every group's shape to its agents, place it, and size the arena if not given (with
+    room for each group's packed block too if `packed`)."""
     if not specs:
         raise WorldError("a scenario needs at least one group")
     groups = _place(specs)
     if arena is None:
-        groups, arena = _auto_arena(groups)
+        groups, arena = _auto_arena(groups, packed)
     world = World(arena, tuple(groups), name)
-    _validate(world)
+    _validate(world, starts=not packed)
+    if packed:
+        packed_start(world)
     return world
+
+
+def packed_start(world: World) -> np.ndarray:
+    """Start cells ``(agents, 2)``: every group's robots in a block against its seeds (see
+    `Group.packed`), checked to lie in the arena on free cells."""
+    cells = np.concatenate([g.packed() for g in world.groups])
+    width, height = world.size
+    inside = (cells >= 0).all(axis=1) & (cells < np.array(world.size)).all(axis=1)
+    if not inside.all():
+        raise WorldError(
+            f"the packed start does not fit in the {width}x{height} arena; enlarge the arena"
+        )
+    taken = world.mask(world.targets) | world.mask(world.seeds)
+    if taken[cells[:, 0], cells[:, 1]].any() or len(np.unique(cells, axis=0)) < len(cells):
+        raise WorldError(
+            "the packed start overlaps a shape or another group's robots; move a seed pose"
+        )
+    return cells
 
 
 def _place(specs: list[GroupSpec]) -> list[Group]:
@@ -222,9 +261,10 @@ def _place(specs: list[GroupSpec]) -> list[Group]:
     return groups
 
 
-def _auto_arena(groups: list[Group]) -> tuple[list[Group], tuple[int, int]]:
+def _auto_arena(groups: list[Group], packed: bool = False) -> tuple[list[Group], tuple[int, int]]:
     """Shift everything to a margin from the origin and grow the arena to room and aspect."""
-    placed = np.concatenate([np.concatenate([g.targets, g.seeds]) for g in groups])
+    blocks = [g.packed() for g in groups] if packed else []
+    placed = np.concatenate([np.concatenate([g.targets, g.seeds]) for g in groups] + blocks)
     low, high = placed.min(axis=0), placed.max(axis=0) + 1
     width, height = (high - low) + 2 * MARGIN
     needed = len(placed) + ROOM_PER_AGENT * sum(g.agents for g in groups)

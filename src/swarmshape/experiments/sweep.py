@@ -33,6 +33,7 @@ from typing import Any
 
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
@@ -58,6 +59,7 @@ KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "max_speed": ("a number", lambda v: _number(v)),
     "max_accel": ("a number", lambda v: _number(v)),
     "curve_every": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
+    "start": ("packed or scatter", lambda v: v in START_LAYOUTS),
 }
 """Every key a sweep file may have but `seeds`, with what each of its values must be."""
 INTERRUPTED = 130

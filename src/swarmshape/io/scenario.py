@@ -29,7 +29,7 @@ import numpy as np
 from PIL import ImageColor
 
 from swarmshape.core.shape import Pose, Shape
-from swarmshape.core.world import GroupSpec, World
+from swarmshape.core.world import START_LAYOUTS, GroupSpec, World
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import DEFAULT_THRESHOLD, grid_for, grid_of, load_grid, read_picture
 from swarmshape.io.files import readable_file
@@ -37,7 +37,8 @@ from swarmshape.io.files import readable_file
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
 
-TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel"}
+TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel",
+            "start"}  # fmt: skip
 GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
 POSE_KEYS = {"x", "y", "rotation"}
 
@@ -130,6 +131,11 @@ def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
     for key in ("max_speed", "max_accel"):
         if key in settings:
             settings[key] = float(where.typed(settings[key], (int, float), key))
+    if "start" in settings and settings["start"] not in START_LAYOUTS:
+        raise ScenarioError(
+            f"{where.path}: start = {settings['start']!r}; choose {', '.join(START_LAYOUTS)} "
+            "(a CSV of start cells is given with --start on the command line)"
+        )
     return settings
 
 

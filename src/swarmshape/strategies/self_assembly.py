@@ -1,0 +1,339 @@
+"""`self-assembly`: programmable self-assembly (M. Rubenstein, A. Cornejo, R. Nagpal,
+"Programmable self-assembly in a thousand-robot swarm", Science 345(6198):795-799, 2014,
+doi:10.1126/science.1254295), ported to the cell lattice.
+
+Every robot runs the same program with the paper's states (plus `wander`, for robots that start
+alone, and `stopped`, for one that walked round everything without finding a place):
+
+- **gradient**: a stationary robot's value is one more than the least value among its 4-adjacent
+  stationary neighbours (seeds hold 0), spread by messages one hop per step;
+- **localisation**: a robot at rest next to seeds or joined robots takes, from each of them, its
+  broadcast position less the sensed (noisy) offset, and moves its estimate a quarter of the way
+  to their mean (the paper's iterative trilateration, with the bearing a lattice compass gives);
+  positions are floats, rounded to a cell only to look the bitmap up; odometry carries the
+  estimate between fixes;
+- **leaving one at a time**: a waiting robot starts to move only when no moving robot is within
+  sensing range and its gradient is greater than every non-joined neighbour's (ties: the higher
+  ID), both for `PATIENCE` steps in a row (so a lost message rarely lets two go at once);
+- **edge-following**: a right-hand wall follower around the stationary robots (turn right,
+  straight, left, back; the next cell must touch a stationary robot), waiting behind a moving
+  robot in its way;
+- **joining**: once its estimate lies in the shape, a robot stops for good when its next move
+  would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
+  end of the layer being built).
+
+As in the paper, shapes with holes cannot be formed (the runner warns), and errors in gradient
+and position warp the shape more the farther it grows from the seeds.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from swarmshape.core.local import Memory, Program, Slot
+from swarmshape.core.perception import Perception
+from swarmshape.strategies import register
+
+START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
+STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
+STATIONARY = (START, WAIT, JOINED, STOPPED)
+
+STATE, GRADIENT, LOCALISED, X, Y, NUMBER = range(6)
+"""What a robot broadcasts, in order: its state plus one (0 is a robot that has not spoken
+yet), gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID."""
+
+FIXED = 1024
+INFINITE = 1 << 30
+"""The gradient of a robot connected to no seed."""
+
+STARTUP = 4
+"""Steps a robot only listens before it may act."""
+PATIENCE = 3
+"""Steps in a row a waiting robot must find itself first in line before it leaves."""
+ALONE = 150
+"""Steps a waiting robot with no gradient waits before it walks off at random to find one."""
+
+# The 5x5 window around a robot, row-major over dy then dx, each -2..2; slot 12 is its own cell.
+WINDOW = np.array([(dx, dy) for dy in range(-2, 3) for dx in range(-2, 3)], dtype=np.int64)
+SELF = 12
+DIRECTION = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
+"""Move index -> unit step (the order of `swarmshape.core.motion.STEPS`)."""
+RIGHT = np.array([0, 3, 4, 2, 1])
+"""The direction a quarter turn clockwise on screen (y down): east -> south -> west -> north."""
+LEFT = np.array([0, 4, 3, 1, 2])
+BACK = np.array([0, 2, 1, 4, 3])
+
+
+def _slot(step: np.ndarray) -> np.ndarray:
+    """The window slot of offsets ``(k, 2)`` within two cells."""
+    return (step[..., 1] + 2) * 5 + (step[..., 0] + 2)
+
+
+AROUND = np.array([[_slot(DIRECTION[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 7, 8, 11, 13, 16,
+                   17, 18)] for d in range(5)])  # fmt: skip
+"""``[d]``: the window slots of the 8 cells around the cell one step in direction d (the
+robot's own cell among them for d > 0)."""
+NEAR8 = np.array([6, 7, 8, 11, 13, 16, 17, 18])
+"""The window slots of the 8 cells around the robot."""
+
+
+@register
+class SelfAssembly(Program):
+    name = "self-assembly"
+    description = (
+        "local: gradient, localisation and edge-following (Rubenstein, Cornejo & Nagpal 2014)"
+    )
+    message_size = 6
+    states = STATES
+    memory: ClassVar[dict[str, Slot]] = {
+        "state": Slot(np.int64, START),
+        "gradient": Slot(np.int64, INFINITE),
+        "localised": Slot(bool, False),
+        "position": Slot(np.float64, 0.0, 2),
+        "heading": Slot(np.int64, 0),
+        "age": Slot(np.int64, 0),
+        "eligible": Slot(np.int64, 0),
+        "travelled": Slot(np.int64, 0),
+        "known": Slot(np.int64, -1, 25),
+    }
+
+    def act(
+        self, sense: Perception, memory: Memory, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        n = len(sense)
+        moved = (sense.moved != 0).any(axis=1)
+        memory.age += 1
+        _odometry(sense, memory, moved)
+        view = _View(sense, memory, moved)
+        _gradient(view, memory)
+        _localise(sense, memory)
+        moves = np.zeros(n, dtype=np.int64)
+        state = memory.state
+        state[(state == START) & (memory.age > STARTUP)] = WAIT
+        _leave(view, memory, moves, rng)
+        _follow(view, sense, memory, moves)
+        _wander(view, memory, moves, rng)
+        position = np.rint(memory.position * FIXED).astype(np.int64)
+        messages = np.column_stack(
+            [memory.state + 1, memory.gradient, memory.localised, position, sense.number]
+        ).astype(np.int64)
+        return moves, messages
+
+    def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
+        return memory.localised.copy(), _frame_cell(memory)
+
+    def finished(self, memory: Memory) -> np.ndarray:
+        return (memory.state == JOINED) | (memory.state == STOPPED)
+
+
+class _View:
+    """What each robot knows of the 5x5 cells around it: ``taken`` (something there),
+    ``stationary`` (a seed, or a robot that stays and has a gradient: the structure, a wall to
+    follow), ``mover`` (a robot heard moving), ``joined`` and their ``gradient``. Stationary
+    neighbours heard before stay known while the robot has not moved and their cell stays
+    taken, so a lost message does not hide a wall; ``unknown`` cells are taken by a robot not
+    heard yet."""
+
+    def __init__(self, sense: Perception, memory: Memory, moved: np.ndarray) -> None:
+        n = len(sense)
+        state = sense.message[:, STATE] - 1
+        spoke = sense.heard & sense.kin & ~sense.seed & (state >= 0)
+        stays = (state <= WAIT) | (state >= JOINED)
+        me = sense.owner
+        self.mover_near = np.zeros(n, dtype=bool)
+        self.mover_near[me[spoke & ~stays]] = True
+        gradient = np.minimum(sense.message[:, GRADIENT], INFINITE)
+        mine = memory.gradient[me]
+        ahead = spoke & (state <= WAIT) & (gradient >= mine)
+        ahead &= (gradient > mine) | (sense.message[:, NUMBER] > sense.number[me])
+        self.outranked = np.zeros(n, dtype=bool)
+        self.outranked[me[ahead]] = True
+
+        ox, oy = sense.offset[:, 0], sense.offset[:, 1]
+        near = (np.abs(ox) < 2.5) & (np.abs(oy) < 2.5)
+        e = np.flatnonzero(near)
+        ox, oy, me = ox[e], oy[e], me[e]
+        cx, cy = np.rint(ox).astype(np.int64), np.rint(oy).astype(np.int64)
+        fx, fy = ox - cx, oy - cy
+        centred = (np.abs(fx) < 0.35) & (np.abs(fy) < 0.35)
+        base = me * 25
+        slot = (cy + 2) * 5 + (cx + 2)
+        taken = np.zeros(n * 25, dtype=bool)
+        taken[base + slot] = True
+        # a robot between two cells holds both
+        sx = np.where(np.abs(fx) > 0.25, np.sign(fx).astype(np.int64), 0)
+        sy = np.where(np.abs(fy) > 0.25, np.sign(fy).astype(np.int64), 0)
+        other = (np.abs(cx + sx) <= 2) & (np.abs(cy + sy) <= 2) & ((sx != 0) | (sy != 0))
+        taken[(base + slot + sy * 5 + sx)[other]] = True
+        self.taken = taken.reshape(n, 25)
+        self.taken[:, SELF] = False
+
+        spoke, stays, state, gradient = spoke[e], stays[e], state[e], gradient[e]
+        still = spoke & stays & centred
+        seed = sense.seed[e] & centred
+        code = np.where(seed, 1, 2 * gradient + (state == JOINED))
+        fresh = np.full(n * 25, -1, dtype=np.int64)
+        put = still | seed
+        fresh[(base + slot)[put]] = code[put]
+        mover = np.zeros(n * 25, dtype=bool)
+        mover[(base + slot)[spoke & ~stays]] = True
+        self.mover = mover.reshape(n, 25)
+        fresh = fresh.reshape(n, 25)
+        known = memory.known
+        known[moved] = -1
+        known[:] = np.where(fresh >= 0, fresh, np.where(self.taken & ~self.mover, known, -1))
+        still_there = known >= 0
+        self.gradient = np.where(still_there, known >> 1, INFINITE)
+        self.stationary = still_there & (self.gradient < INFINITE)
+        self.joined = self.stationary & ((known & 1) == 1)
+        self.unknown = self.taken & ~still_there & ~self.mover
+        self.ready = sense.ready
+
+
+def _odometry(sense: Perception, memory: Memory, moved: np.ndarray) -> None:
+    """Dead reckoning: a localised robot adds the cells it moved; its heading is its last move."""
+    memory.position[memory.localised] += sense.moved[memory.localised]
+    for direction in range(1, 5):
+        went = (sense.moved == DIRECTION[direction]).all(axis=1)
+        memory.heading[went] = direction
+    memory.travelled[moved] += 1
+
+
+def _gradient(view: _View, memory: Memory) -> None:
+    """Stationary robots keep the least value their touching stationary neighbours give (the
+    paper's gradient distance of 1.5 bodies: the 8 cells around); values only fall, since a
+    robot leaves only when no neighbour's value depends on it."""
+    least = view.gradient[:, NEAR8].min(axis=1)
+    offer = np.where(least >= INFINITE, INFINITE, least + 1)
+    still = np.isin(memory.state, STATIONARY)
+    memory.gradient = np.where(still, np.minimum(memory.gradient, offer), offer)
+
+
+def _localise(sense: Perception, memory: Memory) -> None:
+    """Robots at rest near seeds or joined robots fix their position from them: the mean of
+    each reference's position less its sensed offset (two are needed for a first fix), and
+    move a quarter of the way there (the paper's step); joined robots keep theirs."""
+    n = len(sense)
+    msg = sense.message
+    robot = sense.heard & sense.kin & ~sense.seed & (msg[:, STATE] == JOINED + 1)
+    robot &= msg[:, LOCALISED] == 1
+    seed = sense.heard & sense.kin & sense.seed
+    use = np.flatnonzero((robot | seed) & sense.ready[sense.owner])
+    me = sense.owner[use]
+    reference = np.where(
+        seed[use, None], sense.seed_frame[use].astype(np.float64), msg[use, X : Y + 1] / FIXED
+    )
+    estimate = reference - sense.offset[use]
+    count = np.bincount(me, minlength=n)
+    total = np.column_stack(
+        [np.bincount(me, estimate[:, 0], minlength=n), np.bincount(me, estimate[:, 1], n)]
+    )
+    fix = total / np.maximum(count, 1)[:, None]
+    open_ = memory.state != JOINED
+    first = open_ & ~memory.localised & (count >= 2)
+    memory.position[first] = fix[first]
+    again = open_ & memory.localised & (count >= 1)
+    memory.position[again] += (fix[again] - memory.position[again]) / 4
+    memory.localised |= first
+
+
+def _frame_cell(memory: Memory) -> np.ndarray:
+    return np.rint(memory.position).astype(np.int64)
+
+
+def _leave(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
+    """Waiting robots with a gradient leave one at a time; those without one for `ALONE`
+    steps, or with no neighbour at all, walk off to find the structure."""
+    state = memory.state
+    waiting = state == WAIT
+    first = waiting & (memory.gradient < INFINITE) & ~view.outranked & ~view.mover_near
+    heading = _first_heading(view)
+    first &= heading > 0
+    memory.eligible = np.where(first, memory.eligible + 1, 0)
+    go = first & (memory.eligible >= PATIENCE) & view.ready
+    state[go] = OUTSIDE
+    memory.heading[go] = heading[go]
+    memory.travelled[go] = 0
+    lonely = waiting & (memory.gradient >= INFINITE)
+    lonely &= (memory.age > ALONE) | ~view.taken[:, NEAR8].any(axis=1)
+    state[lonely] = WANDER
+
+
+def _first_heading(view: _View) -> np.ndarray:
+    """The heading that puts the stationary robots on the right: a free direction whose right
+    side is stationary, or else one whose front-right cell is; 0 if none."""
+    n = len(view.ready)
+    heading = np.zeros(n, dtype=np.int64)
+    for pick in ("side", "corner"):
+        for d in (1, 3, 2, 4):
+            ahead = _slot(DIRECTION[d])
+            if pick == "side":
+                wall = _slot(DIRECTION[RIGHT[d]])
+            else:
+                wall = _slot(DIRECTION[d] + DIRECTION[RIGHT[d]])
+            fits = (heading == 0) & ~view.taken[:, ahead] & view.stationary[:, wall]
+            heading[fits] = d
+    return heading
+
+
+def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -> None:
+    """Edge-followers at rest take their next wall-follower step, or join."""
+    n = len(sense)
+    state = memory.state
+    rows = np.arange(n)
+    going = np.isin(state, (OUTSIDE, INSIDE)) & view.ready
+    going &= ~view.unknown[:, NEAR8].any(axis=1)
+    cell = _frame_cell(memory)
+    in_shape = memory.localised & sense.blueprint.contains(sense.group, cell)
+    state[going & (state == OUTSIDE) & in_shape] = INSIDE
+    choice = np.zeros(n, dtype=np.int64)
+    heading = np.where(memory.heading > 0, memory.heading, 1)
+    for turn in (RIGHT, np.arange(5), LEFT, BACK):
+        d = turn[heading]
+        target = _slot(DIRECTION[d])
+        wall = view.stationary[rows, target]
+        contact = view.stationary[rows[:, None], AROUND[d]].any(axis=1)
+        fits = (choice == 0) & ~wall & contact
+        choice[fits] = d[fits]
+    inside = going & (state == INSIDE)
+    four = NEAR8[[1, 3, 4, 6]]
+    least = view.gradient[:, NEAR8].min(axis=1)
+    mine = np.where(least >= INFINITE, INFINITE, least + 1)
+    layer_end = (view.joined[:, four] & (view.gradient[:, four] >= mine[:, None])).any(axis=1)
+    layer_end &= mine < INFINITE
+    next_cell = cell + DIRECTION[choice]
+    leaves = ~sense.blueprint.contains(sense.group, next_cell) | (choice == 0)
+    join = inside & (layer_end | leaves)
+    state[join] = JOINED
+    memory.gradient[join] = mine[join]
+    blocked = view.taken[rows, _slot(DIRECTION[choice])]
+    step = going & ~join & (choice > 0) & ~blocked
+    moves[step] = choice[step]
+    cells = np.array([len(c) for c in sense.blueprint.cells], dtype=np.int64)[sense.group]
+    limit = 32 * np.sqrt(cells) + 100
+    lost = going & ~join & (memory.travelled > limit)
+    state[lost] = STOPPED
+    moves[lost] = 0
+    found = (state == WANDER) & view.ready & ~view.unknown[:, NEAR8].any(axis=1)
+    found &= (view.stationary[:, NEAR8] & (view.gradient[:, NEAR8] < INFINITE)).any(axis=1)
+    heading = _first_heading(view)
+    found &= heading > 0
+    state[found] = OUTSIDE
+    memory.heading[found] = heading[found]
+    memory.travelled[found] = 0
+    moves[found] = heading[found]
+
+
+def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
+    """Robots that have not found the structure step at random to a free cell, half the
+    time."""
+    walking = (memory.state == WANDER) & view.ready & (moves == 0)
+    noise = rng.random((len(moves), 5))
+    noise[:, 0] = 0.0
+    for d in range(1, 5):
+        noise[view.taken[:, _slot(DIRECTION[d])], d] = -1.0
+    choice = noise.argmax(axis=1)
+    walking &= noise.max(axis=1) > 0.5
+    moves[walking] = choice[walking]

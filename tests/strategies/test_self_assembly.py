@@ -1,0 +1,82 @@
+"""`self-assembly` (Rubenstein, Cornejo & Nagpal 2014 on the lattice) forms small hole-free
+shapes from a packed block and from a scattered start, deterministically, without overlaps,
+and its joined robots never move again."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from swarmshape.core.metrics import run_metrics
+from swarmshape.errors import InputError
+from swarmshape.io.bitmap import ShapeWarning
+from swarmshape.runs import Runner, build, configure, run
+from swarmshape.strategies.self_assembly import JOINED
+from tests.conftest import SHAPES
+
+
+def formed(shape: str, **options):
+    config = configure(SHAPES / shape, strategy="self-assembly", **options)
+    return run(build(config), max_steps=20_000)
+
+
+@pytest.mark.parametrize("start", ["packed", "scatter"])
+@pytest.mark.parametrize(("shape", "cells"), [("small-square.png", None), ("horseshoe.png", None),
+                                              ("letter-k.png", 12)])  # fmt: skip
+def test_small_hole_free_shapes_form_without_overlaps(shape, cells, start):
+    swarm = formed(shape, cells=cells, start=start, seed=2)
+    metrics = run_metrics(swarm)
+    assert metrics["coverage"] == 1.0 or metrics["iou"] >= 0.9, metrics
+    assert swarm.overlap_total == 0
+
+
+def test_the_same_seed_gives_the_same_run():
+    a, b = (formed("horseshoe.png", start="packed", seed=7) for _ in "ab")
+    assert a.step_count == b.step_count
+    assert np.array_equal(a.cell, b.cell)
+    assert np.array_equal(a.driver.memory.state, b.driver.memory.state)
+
+
+def test_with_lost_messages_and_noisy_distances_the_shape_still_forms():
+    swarm = formed("small-square.png", start="packed", seed=3, msg_loss=0.1, distance_noise=0.1)
+    assert run_metrics(swarm)["iou"] >= 0.9
+    assert swarm.overlap_total == 0
+
+
+def test_joined_robots_never_move_again():
+    config = configure(SHAPES / "horseshoe.png", strategy="self-assembly", start="packed", seed=4)
+    runner = Runner(build(config), max_steps=20_000)
+    swarm = runner.swarm
+    joined, where = np.zeros(len(swarm.cell), dtype=bool), swarm.cell.copy()
+    while not runner.finished:
+        runner.step()
+        assert (swarm.cell[joined] == where[joined]).all()
+        joined = swarm.driver.memory.state == JOINED
+        where = swarm.cell.copy()
+    assert joined.any()
+
+
+def test_a_shape_with_a_hole_is_warned_about_in_one_line():
+    config = configure(SHAPES / "ring.png", strategy="self-assembly", cells=10, seed=1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        build(config)
+    found = [w for w in caught if issubclass(w.category, ShapeWarning)]
+    assert len(found) == 1 and "cannot form holes" in str(found[0].message)
+    assert "\n" not in str(found[0].message)
+
+
+def test_the_packed_start_is_a_block_against_the_seeds():
+    swarm = build(configure(SHAPES / "square.png", strategy="self-assembly", start="packed"))
+    seeds = swarm.world.seeds
+    touching = np.abs(swarm.cell[:, None, :] - seeds[None, :, :]).sum(axis=2) == 1
+    assert touching.any()
+    low, high = swarm.cell.min(axis=0), swarm.cell.max(axis=0)
+    assert (high - low + 1).prod() == len(swarm.cell)  # 64 robots: an 8x8 block
+
+
+def test_an_unknown_start_word_is_refused():
+    with pytest.raises(InputError, match="unknown --start 'pakced'"):
+        configure(SHAPES / "square.png", start="pakced")
