@@ -14,7 +14,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import pygame
 
-from swarmshape.runs import configure, load_world, start_swarm
+from swarmshape.runs import configure, load_world, start_cells, start_swarm
 from swarmshape.ui.viewer import Viewer
 
 
@@ -26,11 +26,16 @@ def main() -> None:
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 800))
     parser.add_argument("--strategy", default="optimal")
+    parser.add_argument("--start", help="packed, scatter or a CSV (as the run's --start)")
+    parser.add_argument("--cells", type=int)
     args = parser.parse_args()
-    config = configure(args.path, seed=args.seed, strategy=args.strategy)
+    config = configure(
+        args.path, seed=args.seed, strategy=args.strategy, start=args.start, cells=args.cells
+    )
     world = load_world(config)
+    start = start_cells(config, world)
     viewer = Viewer(
-        lambda new: start_swarm(config, new),
+        lambda new: start_swarm(config, new, start if new is world else None),
         world,
         title=world.name,
         size=tuple(args.size),
