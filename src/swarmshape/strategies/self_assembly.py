@@ -52,6 +52,13 @@ STARTUP = 4
 """Steps a robot only listens before it may act."""
 PATIENCE = 3
 """Steps in a row a waiting robot must find itself first in line before it leaves."""
+LOSSY_PATIENCE = 8
+"""The same for a robot that has lately missed a neighbour's message: a moving neighbour must
+go unheard this many steps in a row before the robot trusts that none is near (at 10% loss,
+three lost messages in a row happen often enough in a run to let a robot leave beside a
+mover, pull the wall from under it, and leave two followers nose to nose for good)."""
+LOSS_MEMORY = 20
+"""Steps a robot remembers that it missed a neighbour's message."""
 ALONE = 150
 """Steps a waiting robot with no gradient waits before it walks off at random to find one."""
 
@@ -87,6 +94,7 @@ class SelfAssembly(Program):
     )
     message_size = 6
     states = STATES
+    forms_holes = False
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
         "gradient": Slot(np.int64, INFINITE),
@@ -95,6 +103,7 @@ class SelfAssembly(Program):
         "heading": Slot(np.int64, 0),
         "age": Slot(np.int64, 0),
         "eligible": Slot(np.int64, 0),
+        "since_loss": Slot(np.int64, LOSS_MEMORY),
         "travelled": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
     }
@@ -150,6 +159,8 @@ class _View:
         ahead &= (gradient > mine) | (sense.message[:, NUMBER] > sense.number[me])
         self.outranked = np.zeros(n, dtype=bool)
         self.outranked[me[ahead]] = True
+        self.missed = np.zeros(n, dtype=bool)
+        self.missed[me[~sense.heard & sense.kin & ~sense.seed]] = True
 
         ox, oy = sense.offset[:, 0], sense.offset[:, 1]
         near = (np.abs(ox) < 2.5) & (np.abs(oy) < 2.5)
@@ -252,7 +263,9 @@ def _leave(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Genera
     heading = _first_heading(view)
     first &= heading > 0
     memory.eligible = np.where(first, memory.eligible + 1, 0)
-    go = first & (memory.eligible >= PATIENCE) & view.ready
+    memory.since_loss = np.where(view.missed, 0, memory.since_loss + 1)
+    patience = np.where(memory.since_loss < LOSS_MEMORY, LOSSY_PATIENCE, PATIENCE)
+    go = first & (memory.eligible >= patience) & view.ready
     state[go] = OUTSIDE
     memory.heading[go] = heading[go]
     memory.travelled[go] = 0
