@@ -17,6 +17,7 @@ import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.audit import overlapping_pairs
+from swarmshape.core.grid import fill_holes
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
@@ -112,7 +113,7 @@ def check_strategy(
     report = Report(cls.name, runs)
     shapes = np.random.default_rng(seed)
     for index in range(runs):
-        world = random_world(shapes)
+        world = random_world(shapes, holes=getattr(cls, "forms_holes", True))
         run_seed = int(shapes.integers(2**32))
         where = (
             f"shape {index} ({len(world.targets)} cells, {world.agents} robots, seed {run_seed})"
@@ -140,11 +141,14 @@ def watch_run(world: World, cls: type[Strategy], seed: int, max_steps: int) -> I
     return watch
 
 
-def random_world(rng: np.random.Generator) -> World:
-    """A small random shape with a few robots too many or too few, in a roomy arena."""
+def random_world(rng: np.random.Generator, holes: bool = True) -> World:
+    """A small random shape with a few robots too many or too few, in a roomy arena; its holes
+    filled unless `holes` (for a program that declares it cannot form them)."""
     height, width = rng.integers(3, 7, size=2)
     grid = rng.random((height, width)) < rng.uniform(0.3, 0.9)
     grid[rng.integers(height), rng.integers(width)] = True
+    if not holes:
+        grid = fill_holes(grid)
     agents = max(1, int(grid.sum()) + int(rng.integers(-3, 7)))
     spec = GroupSpec("check", Shape(grid), (58, 111, 216), agents)
     auto = build_world([spec])

@@ -211,13 +211,15 @@ def load_world(config: RunConfig) -> World:
             ShapeWarning,
             stacklevel=2,
         )
-    if strategies.is_code(config.strategy) or config.strategy != "self-assembly":
+    if strategies.is_code(config.strategy):  # user code is loaded once, when the run starts
+        return world
+    if getattr(strategies.get(config.strategy), "forms_holes", True):
         return world
     for group in world.groups:
         if has_hole(group.shape.grid):
             warnings.warn(
-                f"shape {group.name!r} has a hole, and self-assembly cannot form holes (robots "
-                "join the edge of what is built, so a hole is filled or left outside)",
+                f"shape {group.name!r} has a hole, and {config.strategy} cannot form holes "
+                "(robots join the edge of what is built, so a hole is filled or left outside)",
                 ShapeWarning,
                 stacklevel=2,
             )

@@ -72,3 +72,10 @@ def has_hole(grid: np.ndarray) -> bool:
     empty = np.pad(~np.asarray(grid, dtype=bool), 1, constant_values=True)
     _, regions = ndimage.label(empty)
     return regions > 1
+
+
+def fill_holes(grid: np.ndarray) -> np.ndarray:
+    """The grid with every hole (see `has_hole`) filled in."""
+    from scipy import ndimage
+
+    return ndimage.binary_fill_holes(np.asarray(grid, dtype=bool))

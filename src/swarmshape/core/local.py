@@ -83,6 +83,8 @@ class Program:
     states: ClassVar[tuple[str, ...]] = ()
     """Names of the values of ``memory.state``, if the program keeps one (the viewer colours
     robots by it)."""
+    forms_holes: ClassVar[bool] = True
+    """False if the program cannot form a shape with a hole (checks and tests then fill them)."""
 
     def __init__(self, senses: Senses | None = None) -> None:
         self.senses = senses or Senses()
