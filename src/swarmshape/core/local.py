@@ -206,7 +206,7 @@ class LocalControl:
         start, owner, other = neighbours(swarm.cell, seeds, swarm.world.size, self.reach)
         seed = other >= n
         centres = np.concatenate([swarm.positions(), seeds + 0.5])
-        offset = centres[other] - centres[owner]
+        offset = centres.take(other, axis=0) - centres.take(owner, axis=0)
         if senses.distance_noise > 0:
             offset = offset + swarm.rng.normal(0.0, senses.distance_noise, offset.shape)
         group = np.concatenate([swarm.group, self.seed_group])
@@ -215,12 +215,14 @@ class LocalControl:
         if senses.msg_loss > 0:
             salt = int(swarm.rng.integers(2**62))
             heard = _link_up(owner, other, salt, senses.msg_loss)
-        robot = heard & ~seed
-        message = np.zeros((len(owner), self.program.message_size), dtype=np.int64)
-        message[robot] = self.broadcast[other[robot]]
-        seed_frame = np.zeros((len(owner), 2), dtype=np.int64)
-        heard_seed = heard & seed
-        seed_frame[heard_seed] = self.seed_frame[other[heard_seed] - n]
+        size = self.program.message_size
+        message = np.concatenate([self.broadcast, np.zeros((len(seeds), size), dtype=np.int64)])
+        message = message.take(other, axis=0)
+        seed_frame = np.concatenate([np.zeros((n, 2), dtype=np.int64), self.seed_frame])
+        seed_frame = seed_frame.take(other, axis=0)
+        if not heard.all():
+            message[~heard] = 0
+            seed_frame[~heard] = 0
         self.lost += int((~heard & ~seed).sum())
         moved = turn(swarm.cell - self.last_cell, (-self.turns[swarm.group]) % 4)
         self.last_cell = swarm.cell.copy()

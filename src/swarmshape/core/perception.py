@@ -123,6 +123,8 @@ def quarter_turns(poses: list[Pose]) -> np.ndarray:
 def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
     """Rotate integer or float vectors ``(k, 2)`` by per-row quarter turns, clockwise on screen."""
     out = np.array(vectors, dtype=np.result_type(vectors, np.int64), copy=True)
+    if not np.any(turns):
+        return out
     for _ in range(3):
         rows = turns > 0
         out[rows] = np.column_stack([-out[rows, 1], out[rows, 0]])
@@ -141,15 +143,13 @@ def neighbours(
     who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
     who[cell[:, 0] + r, cell[:, 1] + r] = np.arange(n)
     who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
-    owners, others = [], []
-    for dx, dy in reach:
-        found = who[cell[:, 0] + r + dx, cell[:, 1] + r + dy]
-        hit = np.flatnonzero(found >= 0)
-        owners.append(hit)
-        others.append(found[hit])
-    owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
-    other = np.concatenate(others) if others else np.zeros(0, dtype=np.int64)
-    order = np.argsort(owner, kind="stable")
-    owner, other = owner[order], other[order]
-    start = np.searchsorted(owner, np.arange(n + 1))
+    k, columns = len(reach), who.shape[1]
+    if k == 0 or n == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return np.zeros(n + 1, dtype=np.int64), empty, empty
+    here = (cell[:, 0] + r) * columns + (cell[:, 1] + r)
+    found = who.ravel()[here[:, None] + (reach[:, 0] * columns + reach[:, 1])[None, :]]
+    hit = np.flatnonzero(found.ravel() >= 0)  # row-major: by robot, then in `reach` order
+    owner, other = hit // k, found.ravel()[hit]
+    start = np.concatenate([[0], np.cumsum((found >= 0).sum(axis=1))])
     return start, owner, other
