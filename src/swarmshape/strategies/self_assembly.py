@@ -115,15 +115,23 @@ class SelfAssembly(Program):
         moved = (sense.moved != 0).any(axis=1)
         memory.age += 1
         _odometry(sense, memory, moved)
-        view = _View(sense, memory, moved)
-        _gradient(view, memory)
-        _localise(sense, memory)
-        moves = np.zeros(n, dtype=np.int64)
         state = memory.state
         state[(state == START) & (memory.age > STARTUP)] = WAIT
-        _leave(view, memory, moves, rng)
-        _follow(view, sense, memory, moves)
-        _wander(view, memory, moves, rng)
+        near = _Near(sense)
+        rows = _busy(near, memory)
+        _settled_gradient(near, memory, rows)
+        _localise(sense, memory)
+        moves = np.zeros(n, dtype=np.int64)
+        if len(rows):
+            view = _View(near, sense, memory, moved, rows)
+            mine = _Rows(memory, rows)
+            moved_rows = np.zeros(len(rows), dtype=np.int64)
+            _gradient(view, mine)
+            _leave(view, mine, moved_rows, rng)
+            _follow(view, _Where(sense, rows), mine, moved_rows)
+            _wander(view, mine, moved_rows, rng)
+            mine.write_back()
+            moves[rows] = moved_rows
         position = np.rint(memory.position * FIXED).astype(np.int64)
         messages = np.column_stack(
             [memory.state + 1, memory.gradient, memory.localised, position, sense.number]
@@ -137,70 +145,155 @@ class SelfAssembly(Program):
         return (memory.state == JOINED) | (memory.state == STOPPED)
 
 
-class _View:
-    """What each robot knows of the 5x5 cells around it: ``taken`` (something there),
-    ``stationary`` (a seed, or a robot that stays and has a gradient: the structure, a wall to
-    follow), ``mover`` (a robot heard moving), ``joined`` and their ``gradient``. Stationary
-    neighbours heard before stay known while the robot has not moved and their cell stays
-    taken, so a lost message does not hide a wall; ``unknown`` cells are taken by a robot not
-    heard yet."""
+class _Near:
+    """Each robot's neighbours within two cells, decoded once a step: the window slot each
+    lies in, whether it sits on a cell centre, and what it said (its state, -1 unheard)."""
 
-    def __init__(self, sense: Perception, memory: Memory, moved: np.ndarray) -> None:
-        n = len(sense)
-        state = sense.message[:, STATE] - 1
-        spoke = sense.heard & sense.kin & ~sense.seed & (state >= 0)
-        stays = (state <= WAIT) | (state >= JOINED)
-        me = sense.owner
-        self.mover_near = np.zeros(n, dtype=bool)
-        self.mover_near[me[spoke & ~stays]] = True
-        gradient = np.minimum(sense.message[:, GRADIENT], INFINITE)
-        mine = memory.gradient[me]
-        ahead = spoke & (state <= WAIT) & (gradient >= mine)
-        ahead &= (gradient > mine) | (sense.message[:, NUMBER] > sense.number[me])
-        self.outranked = np.zeros(n, dtype=bool)
-        self.outranked[me[ahead]] = True
-        self.missed = np.zeros(n, dtype=bool)
-        self.missed[me[~sense.heard & sense.kin & ~sense.seed]] = True
-
+    def __init__(self, sense: Perception) -> None:
         ox, oy = sense.offset[:, 0], sense.offset[:, 1]
-        near = (np.abs(ox) < 2.5) & (np.abs(oy) < 2.5)
-        e = np.flatnonzero(near)
-        ox, oy, me = ox[e], oy[e], me[e]
-        cx, cy = np.rint(ox).astype(np.int64), np.rint(oy).astype(np.int64)
-        fx, fy = ox - cx, oy - cy
-        centred = (np.abs(fx) < 0.35) & (np.abs(fy) < 0.35)
-        base = me * 25
-        slot = (cy + 2) * 5 + (cx + 2)
-        taken = np.zeros(n * 25, dtype=bool)
+        e = np.flatnonzero((np.abs(ox) < 2.5) & (np.abs(oy) < 2.5))
+        self.entries = e
+        self.me = sense.owner[e]
+        ox, oy = ox[e], oy[e]
+        self.cx, self.cy = np.rint(ox).astype(np.int64), np.rint(oy).astype(np.int64)
+        self.fx, self.fy = ox - self.cx, oy - self.cy
+        self.centred = (np.abs(self.fx) < 0.35) & (np.abs(self.fy) < 0.35)
+        self.slot = (self.cy + 2) * 5 + (self.cx + 2)
+        self.seed = sense.seed[e]
+        state = sense.message[e, STATE] - 1
+        self.spoke = sense.heard[e] & sense.kin[e] & ~self.seed & (state >= 0)
+        self.state = state
+        self.stays = (state <= WAIT) | (state >= JOINED)
+        self.gradient = np.minimum(sense.message[e, GRADIENT], INFINITE)
+        n = len(sense)
+        touching = np.isin(self.slot, NEAR8)
+        self.crowded = np.bincount(self.me[touching], minlength=n) >= 8
+        unheard = ~sense.heard & sense.kin & ~sense.seed
+        self.missed = np.bincount(sense.owner[unheard], minlength=n) > 0
+
+
+def _busy(near: _Near, memory: Memory) -> np.ndarray:
+    """The robots with something to decide: all but the joined, the stopped, and waiting
+    robots hemmed in on all eight sides (they cannot leave; only their gradient changes)."""
+    state = memory.state
+    resting = (state == JOINED) | (state == STOPPED)
+    resting |= ((state == WAIT) | (state == START)) & near.crowded
+    memory.known[resting] = -1
+    memory.eligible[resting] = 0
+    memory.since_loss = np.where(near.missed, 0, memory.since_loss + 1)
+    return np.flatnonzero(~resting)
+
+
+def _settled_gradient(near: _Near, memory: Memory, rows: np.ndarray) -> None:
+    """The gradient of robots not in `rows` (all stationary): the least of their own and one
+    more than each touching stationary neighbour heard this step (see `_gradient`)."""
+    n = len(memory)
+    idle = np.ones(n, dtype=bool)
+    idle[rows] = False
+    use = idle[near.me] & np.isin(near.slot, NEAR8) & near.centred
+    use &= (near.spoke & near.stays) | near.seed
+    value = np.where(near.seed[use], 0, near.gradient[use])
+    least = np.full(n, INFINITE, dtype=np.int64)
+    np.minimum.at(least, near.me[use], value)
+    offer = np.where(least >= INFINITE, INFINITE, least + 1)
+    memory.gradient[idle] = np.minimum(memory.gradient[idle], offer[idle])
+
+
+class _Rows:
+    """A program's memory for some robots only (`rows`), written back by `write_back`."""
+
+    def __init__(self, memory: Memory, rows: np.ndarray) -> None:
+        self._memory, self._rows = memory, rows
+        for name in memory.slots:
+            setattr(self, name, getattr(memory, name)[rows])
+
+    def __len__(self) -> int:
+        return len(self._rows)
+
+    def write_back(self) -> None:
+        for name in self._memory.slots:
+            getattr(self._memory, name)[self._rows] = getattr(self, name)
+
+
+class _Where:
+    """The parts of a `Perception` that `_follow` reads, for robots `rows` only."""
+
+    def __init__(self, sense: Perception, rows: np.ndarray) -> None:
+        self.group = sense.group[rows]
+        self.blueprint = sense.blueprint
+        self.rows = len(rows)
+
+    def __len__(self) -> int:
+        return self.rows
+
+
+class _View:
+    """What each robot of `rows` knows of the 5x5 cells around it: ``taken`` (something
+    there), ``stationary`` (a seed, or a robot that stays and has a gradient: the structure, a
+    wall to follow), ``mover`` (a robot heard moving), ``joined`` and their ``gradient``.
+    Stationary neighbours heard before stay known while the robot has not moved and their cell
+    stays taken, so a lost message does not hide a wall; ``unknown`` cells are taken by a robot
+    not heard yet. Also, from everything it senses: ``mover_near`` (a moving robot heard)
+    and ``outranked`` (a waiting robot heard that goes first)."""
+
+    def __init__(
+        self, near: _Near, sense: Perception, memory: Memory, moved: np.ndarray, rows: np.ndarray
+    ) -> None:
+        n, a = len(sense), len(rows)
+        index = np.full(n, -1, dtype=np.int64)
+        index[rows] = np.arange(a)
+        # from everything sensed (up to the sensing radius)
+        pick = np.flatnonzero(index[sense.owner] >= 0)
+        me = index[sense.owner[pick]]
+        seed = sense.seed[pick]
+        state = sense.message[pick, STATE] - 1
+        spoke = sense.heard[pick] & sense.kin[pick] & ~seed & (state >= 0)
+        stays = (state <= WAIT) | (state >= JOINED)
+        self.mover_near = np.zeros(a, dtype=bool)
+        self.mover_near[me[spoke & ~stays]] = True
+        gradient = np.minimum(sense.message[pick, GRADIENT], INFINITE)
+        mine = memory.gradient[rows][me]
+        ahead = spoke & (state <= WAIT) & (gradient >= mine)
+        ahead &= (gradient > mine) | (sense.message[pick, NUMBER] > sense.number[rows][me])
+        self.outranked = np.zeros(a, dtype=bool)
+        self.outranked[me[ahead]] = True
+
+        # the 5x5 window
+        keep = np.flatnonzero(index[near.me] >= 0)
+        me = index[near.me[keep]]
+        cx, cy, fx, fy = near.cx[keep], near.cy[keep], near.fx[keep], near.fy[keep]
+        base, slot = me * 25, near.slot[keep]
+        taken = np.zeros(a * 25, dtype=bool)
         taken[base + slot] = True
         # a robot between two cells holds both
         sx = np.where(np.abs(fx) > 0.25, np.sign(fx).astype(np.int64), 0)
         sy = np.where(np.abs(fy) > 0.25, np.sign(fy).astype(np.int64), 0)
         other = (np.abs(cx + sx) <= 2) & (np.abs(cy + sy) <= 2) & ((sx != 0) | (sy != 0))
         taken[(base + slot + sy * 5 + sx)[other]] = True
-        self.taken = taken.reshape(n, 25)
+        self.taken = taken.reshape(a, 25)
         self.taken[:, SELF] = False
 
-        spoke, stays, state, gradient = spoke[e], stays[e], state[e], gradient[e]
+        spoke, stays, state = near.spoke[keep], near.stays[keep], near.state[keep]
+        centred, seed = near.centred[keep], near.seed[keep] & near.centred[keep]
         still = spoke & stays & centred
-        seed = sense.seed[e] & centred
-        code = np.where(seed, 1, 2 * gradient + (state == JOINED))
-        fresh = np.full(n * 25, -1, dtype=np.int64)
+        code = np.where(seed, 1, 2 * near.gradient[keep] + (state == JOINED))
+        fresh = np.full(a * 25, -1, dtype=np.int64)
         put = still | seed
         fresh[(base + slot)[put]] = code[put]
-        mover = np.zeros(n * 25, dtype=bool)
+        mover = np.zeros(a * 25, dtype=bool)
         mover[(base + slot)[spoke & ~stays]] = True
-        self.mover = mover.reshape(n, 25)
-        fresh = fresh.reshape(n, 25)
-        known = memory.known
-        known[moved] = -1
-        known[:] = np.where(fresh >= 0, fresh, np.where(self.taken & ~self.mover, known, -1))
+        self.mover = mover.reshape(a, 25)
+        fresh = fresh.reshape(a, 25)
+        known = memory.known[rows]
+        known[moved[rows]] = -1
+        known = np.where(fresh >= 0, fresh, np.where(self.taken & ~self.mover, known, -1))
+        memory.known[rows] = known
         still_there = known >= 0
         self.gradient = np.where(still_there, known >> 1, INFINITE)
         self.stationary = still_there & (self.gradient < INFINITE)
         self.joined = self.stationary & ((known & 1) == 1)
         self.unknown = self.taken & ~still_there & ~self.mover
-        self.ready = sense.ready
+        self.ready = sense.ready[rows]
 
 
 def _odometry(sense: Perception, memory: Memory, moved: np.ndarray) -> None:
@@ -231,7 +324,8 @@ def _localise(sense: Perception, memory: Memory) -> None:
     robot = sense.heard & sense.kin & ~sense.seed & (msg[:, STATE] == JOINED + 1)
     robot &= msg[:, LOCALISED] == 1
     seed = sense.heard & sense.kin & sense.seed
-    use = np.flatnonzero((robot | seed) & sense.ready[sense.owner])
+    open_owner = sense.ready & (memory.state != JOINED)
+    use = np.flatnonzero((robot | seed) & open_owner[sense.owner])
     me = sense.owner[use]
     reference = np.where(
         seed[use, None], sense.seed_frame[use].astype(np.float64), msg[use, X : Y + 1] / FIXED
@@ -263,7 +357,6 @@ def _leave(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Genera
     heading = _first_heading(view)
     first &= heading > 0
     memory.eligible = np.where(first, memory.eligible + 1, 0)
-    memory.since_loss = np.where(view.missed, 0, memory.since_loss + 1)
     patience = np.where(memory.since_loss < LOSS_MEMORY, LOSSY_PATIENCE, PATIENCE)
     go = first & (memory.eligible >= patience) & view.ready
     state[go] = OUTSIDE
