@@ -14,7 +14,8 @@ alone, and `stopped`, for one that walked round everything without finding a pla
   estimate between fixes;
 - **leaving one at a time**: a waiting robot starts to move only when no moving robot is within
   sensing range and its gradient is greater than every non-joined neighbour's (ties: the higher
-  ID), both for `PATIENCE` steps in a row (so a lost message rarely lets two go at once);
+  ID); a robot that has lately missed messages waits for that `LOSSY_PATIENCE` steps in a row
+  (so a lost message rarely lets it go beside a mover), others at once;
 - **edge-following**: a right-hand wall follower around the stationary robots (turn right,
   straight, left, back; the next cell must touch a stationary robot), waiting behind a moving
   robot in its way;
@@ -50,8 +51,9 @@ INFINITE = 1 << 30
 
 STARTUP = 4
 """Steps a robot only listens before it may act."""
-PATIENCE = 3
-"""Steps in a row a waiting robot must find itself first in line before it leaves."""
+PATIENCE = 1
+"""Steps in a row a waiting robot must find itself first in line before it leaves, when every
+neighbour's message arrives: one, since a robot that left is heard moving the next step."""
 LOSSY_PATIENCE = 8
 """The same for a robot that has lately missed a neighbour's message: a moving neighbour must
 go unheard this many steps in a row before the robot trusts that none is near (at 10% loss,
@@ -84,6 +86,8 @@ AROUND = np.array([[_slot(DIRECTION[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 
 robot's own cell among them for d > 0)."""
 NEAR8 = np.array([6, 7, 8, 11, 13, 16, 17, 18])
 """The window slots of the 8 cells around the robot."""
+TOUCHING = np.isin(np.arange(25), NEAR8)
+"""Per window slot, whether it is one of `NEAR8`."""
 
 
 @register
@@ -166,7 +170,7 @@ class _Near:
         self.stays = (state <= WAIT) | (state >= JOINED)
         self.gradient = np.minimum(sense.message[e, GRADIENT], INFINITE)
         n = len(sense)
-        touching = np.isin(self.slot, NEAR8)
+        touching = TOUCHING[self.slot]
         self.crowded = np.bincount(self.me[touching], minlength=n) >= 8
         unheard = ~sense.heard & sense.kin & ~sense.seed
         self.missed = np.bincount(sense.owner[unheard], minlength=n) > 0
@@ -190,7 +194,7 @@ def _settled_gradient(near: _Near, memory: Memory, rows: np.ndarray) -> None:
     n = len(memory)
     idle = np.ones(n, dtype=bool)
     idle[rows] = False
-    use = idle[near.me] & np.isin(near.slot, NEAR8) & near.centred
+    use = idle[near.me] & TOUCHING[near.slot] & near.centred
     use &= (near.spoke & near.stays) | near.seed
     value = np.where(near.seed[use], 0, near.gradient[use])
     least = np.full(n, INFINITE, dtype=np.int64)
