@@ -129,3 +129,19 @@ def test_a_name_with_a_line_break_does_not_split_the_error_line(tmp_path, capsys
         assert main([arg.replace("{dir}", str(tmp_path)) for arg in args]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and shown in err and "\x1b" not in err
+
+
+def test_start_packed_runs_self_assembly_from_a_block_against_the_seeds(tmp_path, capsys):
+    out = tmp_path / "m.json"
+    args = [str(SHAPES / "small-square.png"), "--headless", "--strategy", "self-assembly"]
+    code = main([*args, "--start", "packed", "--seed", "2", "--metrics", str(out)])
+    assert code == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["coverage"] == 1.0 and metrics["overlaps"] == 0
+
+
+def test_an_unknown_start_word_is_one_line_on_stderr():
+    result = swarmshape(str(SHAPES / "line.png"), "--headless", "--start", "pakced")
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "expected packed, scatter or a CSV file" in lines[0]
