@@ -41,9 +41,10 @@ START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
 STATIONARY = (START, WAIT, JOINED, STOPPED)
 
-STATE, GRADIENT, LOCALISED, X, Y, NUMBER = range(6)
+STATE, GRADIENT, LOCALISED, X, Y, NUMBER, WANT = range(7)
 """What a robot broadcasts, in order: its state plus one (0 is a robot that has not spoken
-yet), gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID."""
+yet), gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID, and
+the direction a blocked follower waits to move in (0 if none)."""
 
 FIXED = 1024
 INFINITE = 1 << 30
@@ -96,7 +97,7 @@ class SelfAssembly(Program):
     description = (
         "local: gradient, localisation and edge-following (Rubenstein, Cornejo & Nagpal 2014)"
     )
-    message_size = 6
+    message_size = 7
     states = STATES
     forms_holes = False
     memory: ClassVar[dict[str, Slot]] = {
@@ -109,6 +110,7 @@ class SelfAssembly(Program):
         "eligible": Slot(np.int64, 0),
         "since_loss": Slot(np.int64, LOSS_MEMORY),
         "travelled": Slot(np.int64, 0),
+        "want": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
     }
 
@@ -138,7 +140,14 @@ class SelfAssembly(Program):
             moves[rows] = moved_rows
         position = np.rint(memory.position * FIXED).astype(np.int64)
         messages = np.column_stack(
-            [memory.state + 1, memory.gradient, memory.localised, position, sense.number]
+            [
+                memory.state + 1,
+                memory.gradient,
+                memory.localised,
+                position,
+                sense.number,
+                memory.want,
+            ]
         ).astype(np.int64)
         return moves, messages
 
@@ -163,7 +172,8 @@ class _Near:
         self.fx, self.fy = ox - self.cx, oy - self.cy
         self.centred = (np.abs(self.fx) < 0.35) & (np.abs(self.fy) < 0.35)
         self.slot = (self.cy + 2) * 5 + (self.cx + 2)
-        self.seed = sense.seed[e]
+        self.kin = sense.kin[e]
+        self.seed = sense.seed[e] & self.kin  # another group's seeds are only obstacles
         state = sense.message[e, STATE] - 1
         self.spoke = sense.heard[e] & sense.kin[e] & ~self.seed & (state >= 0)
         self.state = state
@@ -172,6 +182,10 @@ class _Near:
         n = len(sense)
         touching = TOUCHING[self.slot]
         self.crowded = np.bincount(self.me[touching], minlength=n) >= 8
+        want = sense.message[e, WANT] * (sense.message[e, WANT] < len(DIRECTION))
+        aim = np.column_stack([self.cx, self.cy]) + DIRECTION[np.maximum(want, 0)]
+        # a moving neighbour that waits to step into the robot's own cell
+        self.facing = self.spoke & ~self.stays & (want > 0) & ~aim.any(axis=1)
         unheard = ~sense.heard & sense.kin & ~sense.seed
         self.missed = np.bincount(sense.owner[unheard], minlength=n) > 0
 
@@ -261,6 +275,15 @@ class _View:
         ahead &= (gradient > mine) | (sense.message[pick, NUMBER] > sense.number[rows][me])
         self.outranked = np.zeros(a, dtype=bool)
         self.outranked[me[ahead]] = True
+        # the nearest seed or gradient-holding stationary robot heard (entries run nearest first)
+        beacon = (seed & sense.kin[pick] & sense.heard[pick]) | (
+            spoke & stays & (gradient < INFINITE)
+        )
+        first = np.flatnonzero(beacon)
+        owners, at = np.unique(me[first], return_index=True)
+        toward = np.rint(sense.offset[pick][first[at]]).astype(np.int64)
+        self.beacon = np.zeros((a, 2), dtype=np.int64)
+        self.beacon[owners] = toward
 
         # the 5x5 window
         keep = np.flatnonzero(index[near.me] >= 0)
@@ -296,7 +319,13 @@ class _View:
         self.gradient = np.where(still_there, known >> 1, INFINITE)
         self.stationary = still_there & (self.gradient < INFINITE)
         self.joined = self.stationary & ((known & 1) == 1)
-        self.unknown = self.taken & ~still_there & ~self.mover
+        foreign = np.zeros(a * 25, dtype=bool)
+        foreign[(base + slot)[~near.kin[keep]]] = True
+        self.foreign = foreign.reshape(a, 25)
+        self.unknown = self.taken & ~still_there & ~self.mover & ~self.foreign
+        facing = np.zeros(a * 25, dtype=bool)
+        facing[(base + slot)[near.facing[keep]]] = True
+        self.facing = facing.reshape(a, 25)
         self.ready = sense.ready[rows]
 
 
@@ -399,6 +428,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     in_shape = memory.localised & sense.blueprint.contains(sense.group, cell)
     state[going & (state == OUTSIDE) & in_shape] = INSIDE
     choice = np.zeros(n, dtype=np.int64)
+    way = np.zeros(n, dtype=np.int64)  # the same, passing by a follower that faces this one
     heading = np.where(memory.heading > 0, memory.heading, 1)
     for turn in (RIGHT, np.arange(5), LEFT, BACK):
         d = turn[heading]
@@ -407,6 +437,9 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
         contact = view.stationary[rows[:, None], AROUND[d]].any(axis=1)
         fits = (choice == 0) & ~wall & contact
         choice[fits] = d[fits]
+        fits = (way == 0) & ~wall & ~view.facing[rows, target] & ~view.foreign[rows, target]
+        fits &= contact
+        way[fits] = d[fits]
     inside = going & (state == INSIDE)
     four = NEAR8[[1, 3, 4, 6]]
     least = view.gradient[:, NEAR8].min(axis=1)
@@ -418,9 +451,10 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     join = inside & (layer_end | leaves)
     state[join] = JOINED
     memory.gradient[join] = mine[join]
-    blocked = view.taken[rows, _slot(DIRECTION[choice])]
-    step = going & ~join & (choice > 0) & ~blocked
-    moves[step] = choice[step]
+    blocked = view.taken[rows, _slot(DIRECTION[way])]
+    step = going & ~join & (way > 0) & ~blocked
+    moves[step] = way[step]
+    memory.want = np.where(going & ~join & (way > 0) & blocked, way, 0)
     cells = np.array([len(c) for c in sense.blueprint.cells], dtype=np.int64)[sense.group]
     limit = 32 * np.sqrt(cells) + 100
     lost = going & ~join & (memory.travelled > limit)
@@ -442,6 +476,12 @@ def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Gener
     walking = (memory.state == WANDER) & view.ready & (moves == 0)
     noise = rng.random((len(moves), 5))
     noise[:, 0] = 0.0
+    # a wanderer that hears the structure walks toward it: along each axis it is off by
+    bx, by = view.beacon[:, 0], view.beacon[:, 1]
+    noise[:, 1] += 2.0 * (bx > 0) + (np.abs(bx) >= np.abs(by)) * (bx > 0)
+    noise[:, 2] += 2.0 * (bx < 0) + (np.abs(bx) >= np.abs(by)) * (bx < 0)
+    noise[:, 3] += 2.0 * (by > 0) + (np.abs(by) > np.abs(bx)) * (by > 0)
+    noise[:, 4] += 2.0 * (by < 0) + (np.abs(by) > np.abs(bx)) * (by < 0)
     for d in range(1, 5):
         noise[view.taken[:, _slot(DIRECTION[d])], d] = -1.0
     choice = noise.argmax(axis=1)
