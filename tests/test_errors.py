@@ -53,7 +53,7 @@ def bad_files(tmp_path_factory) -> Path:
         "shapes = ['one.png']\nstrategies = ['optimal']\nspeed = 3\n"
     )
     (folder / "old.state").write_bytes(b"swarmshape state 1\n\x80\x05garbage")
-    manifest = {"format": "swarmshape state", "version": 2, "values": {}, "arrays": []}
+    manifest = {"format": "swarmshape state", "version": 3, "values": {}, "arrays": []}
     with (folder / "damaged.state").open("wb") as handle:
         text = json.dumps({**manifest, "checksum": "0"}).encode()
         np.savez(handle, manifest=np.frombuffer(text, dtype=np.uint8))

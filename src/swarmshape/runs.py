@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from swarmshape import strategies
+from swarmshape.core.faults import FaultEvent, Faults, check_rate, events_from_values
 from swarmshape.core.motion import Limits
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.swarm import Params, Swarm
@@ -64,6 +65,10 @@ class RunConfig:
     """A CSV of start cells (columns x,y); None draws random free cells."""
     fit: str | None = None
     """"agents": size the shape to the robots (as many cells as there are robots, or fewer)."""
+    faults: tuple[FaultEvent, ...] = ()
+    """Fault events: robots removed or stalled at given steps (see `swarmshape.core.faults`)."""
+    failure_rate: float = 0.0
+    """Chance per robot per step that it fails and is removed."""
 
     def __post_init__(self) -> None:
         if self.seed is not None and not 0 <= self.seed < 2**63:
@@ -77,6 +82,8 @@ class RunConfig:
         if self.fit == "agents" and self.agents is None:
             raise InputError("--fit agents sizes the shape to --agents N; give that number")
         Limits(self.max_speed, self.max_accel)  # checks them
+        object.__setattr__(self, "faults", events_from_values(self.faults, "faults"))
+        object.__setattr__(self, "failure_rate", check_rate(self.failure_rate))
 
     @property
     def shape_path(self) -> Path:
@@ -88,6 +95,7 @@ class RunConfig:
         for name in ("shape", "start"):
             plain[name] = None if plain[name] is None else str(plain[name])
         plain["arena"] = None if self.arena is None else list(self.arena)
+        plain["faults"] = [event.values() for event in self.faults]
         return plain
 
     @classmethod
@@ -112,7 +120,8 @@ FITS = (None, "agents")
 
 KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
          "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,
-         "max_steps": int, "start": Path, "fit": str}  # fmt: skip
+         "max_steps": int, "start": Path, "fit": str, "faults": list,
+         "failure_rate": float}  # fmt: skip
 """The kind of value each `RunConfig` field takes (None is allowed where the default is None)."""
 
 
@@ -127,6 +136,8 @@ def _typed(value: Any, kind: type, where: str) -> Any:
         if pair and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
             return (value[0], value[1])
         raise InputError(f"{where} must be two whole numbers [width, height], got {value!r}")
+    if kind is list:
+        return events_from_values(value, where)
     if kind is float and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     if isinstance(value, kind) and (kind is bool or not isinstance(value, bool)):
@@ -195,7 +206,8 @@ def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None
     """A swarm on a given world (a painted one, say), run as `config` says."""
     strategy = strategies.create(config.strategy, order=config.order)
     params = Params(limits=Limits(config.max_speed, config.max_accel))
-    return Swarm(world, strategy, config.seeded().seed, params, start)
+    faults = Faults(config.faults, config.failure_rate)
+    return Swarm(world, strategy, config.seeded().seed, params, start, faults)
 
 
 def save(swarm: Swarm, path: Path, config: RunConfig) -> None:
@@ -260,7 +272,9 @@ class Runner:
 
     @property
     def finished(self) -> bool:
-        return self.swarm.complete or self.out_of_steps
+        """Formed with no fault event still to come, or out of steps."""
+        swarm = self.swarm
+        return (swarm.complete and not swarm.faults.ahead(swarm.step_count)) or self.out_of_steps
 
     def step(self) -> None:
         self.swarm.step()
