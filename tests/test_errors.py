@@ -72,6 +72,12 @@ def bad_files(tmp_path_factory) -> Path:
     (folder / "code.toml").write_text("strategy = 'this:X'\n[[groups]]\nshape = 'one.png'\n")
     (folder / "code-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['evil:X']\n")
     (folder / "nope-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['nope']\n")
+    (folder / "faults.toml").write_text(
+        "[[faults]]\nstep = 3\nkind = 'melt'\n[[groups]]\nshape = 'one.png'\n"
+    )
+    (folder / "fault-sweep.toml").write_text(
+        "shapes = ['one.png']\nstrategies = ['optimal']\nfail = ['0.2']\n"
+    )
     (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
     (folder / "letters.csv").write_text("x,y\na,b\n")
     (folder / "broken_strategy.py").write_text(
