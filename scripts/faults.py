@@ -166,7 +166,21 @@ def main() -> None:
     parser.add_argument("--cells", type=int, default=1000)
     parser.add_argument("--out", type=Path, default=DOCS / "faults.json")
     parser.add_argument("--no-pictures", action="store_true")
+    parser.add_argument(
+        "--pictures-only",
+        action="store_true",
+        help="only the coverage plot (one heal per strategy) and the healing picture",
+    )
     args = parser.parse_args()
+    if args.pictures_only:
+        curves = {}
+        for strategy in args.strategies:
+            formed = form(strategy, args.cells, spares=True)
+            curves[strategy] = heal(formed, strategy, "random")[1]
+            print(strategy, "healed in", len(curves[strategy]) - 2, "steps", flush=True)
+        coverage_plot(curves, DOCS / "fault-coverage.png")
+        healing_picture(DOCS / "faults-healing.png")
+        return
     results: dict = {"cells": args.cells, "seed": SEED, "share_removed": SHARE, "spares": SPARES}
     curves = {}
     for strategy in args.strategies:
