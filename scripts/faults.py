@@ -122,7 +122,7 @@ def healing_picture(path: Path) -> None:
     renderer = Renderer(swarm.world)
     shots.append((f"step {swarm.step_count}: 20% removed", frame(swarm, (360, 260), renderer)))
     fault_step = swarm.step_count
-    while swarm.step_count < fault_step + 25:
+    while swarm.step_count < fault_step + 110:
         swarm.step()
     shots.append((f"+{swarm.step_count - fault_step} steps", frame(swarm, (360, 260), renderer)))
     while not swarm.complete:
