@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from swarmshape import strategies
+from swarmshape.core.faults import FaultEvent, Faults, check_rate, events_from_values
 from swarmshape.core.motion import Limits
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
@@ -71,6 +72,10 @@ class RunConfig:
     """Local programs: how far, in cells, a robot senses and hears its neighbours."""
     distance_noise: float = Senses.distance_noise
     msg_loss: float = Senses.msg_loss
+    faults: tuple[FaultEvent, ...] = ()
+    """Fault events: robots removed or stalled at given steps (see `swarmshape.core.faults`)."""
+    failure_rate: float = 0.0
+    """Chance per robot per step that it fails and is removed."""
 
     def __post_init__(self) -> None:
         if self.seed is not None and not 0 <= self.seed < 2**63:
@@ -86,6 +91,8 @@ class RunConfig:
         Limits(self.max_speed, self.max_accel)  # checks them
         Params(speed_variation=self.speed_variation)
         self.senses()
+        object.__setattr__(self, "faults", events_from_values(self.faults, "faults"))
+        object.__setattr__(self, "failure_rate", check_rate(self.failure_rate))
 
     def senses(self) -> Senses:
         """How well a local program's robots sense and talk."""
@@ -101,6 +108,7 @@ class RunConfig:
         for name in ("shape", "start"):
             plain[name] = None if plain[name] is None else str(plain[name])
         plain["arena"] = None if self.arena is None else list(self.arena)
+        plain["faults"] = [event.values() for event in self.faults]
         return plain
 
     @classmethod
@@ -133,7 +141,8 @@ NULLABLE = {field.name for field in dataclasses.fields(RunConfig) if field.defau
 KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
          "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,
          "max_steps": int, "start": Path, "fit": str, "speed_variation": float,
-         "sense_radius": float, "distance_noise": float, "msg_loss": float}  # fmt: skip
+         "sense_radius": float, "distance_noise": float, "msg_loss": float, "faults": list,
+         "failure_rate": float}  # fmt: skip
 """The kind of value each `RunConfig` field takes (None is allowed where the default is None)."""
 
 
@@ -148,6 +157,8 @@ def _typed(value: Any, kind: type, where: str) -> Any:
         if pair and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
             return (value[0], value[1])
         raise InputError(f"{where} must be two whole numbers [width, height], got {value!r}")
+    if kind is list:
+        return events_from_values(value, where)
     if kind is float and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     if isinstance(value, kind) and (kind is bool or not isinstance(value, bool)):
@@ -217,7 +228,8 @@ def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None
     strategy = strategies.create(config.strategy, order=config.order, senses=config.senses())
     limits = Limits(config.max_speed, config.max_accel)
     params = Params(limits=limits, speed_variation=config.speed_variation)
-    return Swarm(world, strategy, config.seeded().seed, params, start)
+    faults = Faults(config.faults, config.failure_rate)
+    return Swarm(world, strategy, config.seeded().seed, params, start, faults)
 
 
 def save(swarm: Swarm, path: Path, config: RunConfig) -> None:
@@ -282,7 +294,10 @@ class Runner:
 
     @property
     def finished(self) -> bool:
-        return self.swarm.complete or self.out_of_steps or self.swarm.driver.quiet
+        """Formed (or a local program gone quiet) with no fault still to come, or out of steps."""
+        swarm = self.swarm
+        settled = swarm.complete or swarm.driver.quiet
+        return (settled and not swarm.faults.ahead(swarm.step_count)) or self.out_of_steps
 
     def step(self) -> None:
         self.swarm.step()

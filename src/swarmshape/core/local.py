@@ -9,6 +9,10 @@ axes) and the message it broadcasts. It never receives the `Swarm`, so it cannot
 `LocalControl` is the swarm's driver for it: it builds the perception, turns moves into claims
 (a move into a taken cell simply does not happen, and the robot's odometry shows it next step),
 keeps the broadcasts, and marks a target filled while a robot of its group rests on it.
+
+Faults: a removed robot is gone from every perception (it neither senses nor is sensed); a
+stalled one is still sensed where it stands, but it is silent (its messages are never heard)
+and does not act. Arrays keep one row per robot throughout, so a program's memory stays valid.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from swarmshape.core.perception import (
     turn,
 )
 from swarmshape.core.snapshot import Snapshot
-from swarmshape.core.states import MOVING, SETTLED, WAITING
+from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
@@ -153,8 +157,9 @@ class LocalControl:
         """Messages lost, and how far robots' own position estimates are off (cells)."""
         figures: dict[str, Any] = {"messages_lost": self.lost}
         estimate = self.program.estimate(self.memory)
-        if estimate is not None and estimate[0].any():
+        if estimate is not None and (estimate[0] & self.swarm.present).any():
             localised, frame = estimate
+            localised = localised & self.swarm.present
             truth = np.zeros_like(self.swarm.cell)
             for group, g in enumerate(self.swarm.world.groups):
                 mine = self.swarm.group == group
@@ -201,7 +206,8 @@ class LocalControl:
         swarm = self.swarm
         n, senses = len(swarm.cell), self.program.senses
         seeds = swarm.world.seeds
-        start, owner, other = neighbours(swarm.cell, seeds, swarm.world.size, self.reach)
+        present = swarm.present
+        start, owner, other = neighbours(swarm.cell, seeds, swarm.world.size, self.reach, present)
         seed = other >= n
         centres = np.concatenate([swarm.positions(), seeds + 0.5])
         offset = centres[other] - centres[owner]
@@ -213,19 +219,21 @@ class LocalControl:
         if senses.msg_loss > 0:
             salt = int(swarm.rng.integers(2**62))
             heard = _link_up(owner, other, salt, senses.msg_loss)
+        self.lost += int((~heard & ~seed).sum())
+        silent = np.concatenate([swarm.state == STALLED, np.zeros(len(seeds), dtype=bool)])
+        heard &= ~silent[other]
         robot = heard & ~seed
         message = np.zeros((len(owner), self.program.message_size), dtype=np.int64)
         message[robot] = self.broadcast[other[robot]]
         seed_frame = np.zeros((len(owner), 2), dtype=np.int64)
         heard_seed = heard & seed
         seed_frame[heard_seed] = self.seed_frame[other[heard_seed] - n]
-        self.lost += int((~heard & ~seed).sum())
         moved = turn(swarm.cell - self.last_cell, (-self.turns[swarm.group]) % 4)
         self.last_cell = swarm.cell.copy()
         return Perception(
             number=self.number,
             group=swarm.group,
-            ready=swarm.ahead == 0,
+            ready=(swarm.ahead == 0) & present & (swarm.state != STALLED),
             moved=moved,
             start=start,
             owner=owner,
@@ -260,8 +268,9 @@ class LocalControl:
         index = np.full(swarm.world.size, -1)
         index[swarm.world.targets[:, 0], swarm.world.targets[:, 1]] = np.arange(len(swarm.filled))
         at = index[swarm.cell[:, 0], swarm.cell[:, 1]]
-        swarm.state[:] = np.where(swarm.ahead > 0, MOVING, WAITING)
-        swarm.state[self.program.finished(self.memory) & (swarm.ahead == 0)] = SETTLED
+        working = (swarm.state != LOST) & (swarm.state != STALLED)
+        swarm.state[working] = np.where(swarm.ahead[working] > 0, MOVING, WAITING)
+        swarm.state[working & self.program.finished(self.memory) & (swarm.ahead == 0)] = SETTLED
         settled = (swarm.state == SETTLED) & (at >= 0)
         settled &= swarm.world.target_group[np.maximum(at, 0)] == swarm.group
         swarm.filled[:] = False
@@ -274,6 +283,13 @@ class LocalControl:
         """The robots learn the new bitmap at `index_world`; what they do with it is theirs."""
 
     def hand_out(self, group: int) -> None:
+        self._note_filled()
+
+    def removed(self, robots: np.ndarray, stalled: bool) -> None:
+        """Fallen robots go silent; the others notice only through what they sense, and regrow
+        the gaps as their program does. The run is not at rest any more."""
+        self.broadcast[robots] = 0
+        self.quiet_steps = 0
         self._note_filled()
 
     def snapshot(self) -> dict[str, Any]:

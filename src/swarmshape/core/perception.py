@@ -131,21 +131,27 @@ def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
 
 
 def neighbours(
-    cell: np.ndarray, seeds: np.ndarray, size: tuple[int, int], reach: np.ndarray
+    cell: np.ndarray,
+    seeds: np.ndarray,
+    size: tuple[int, int],
+    reach: np.ndarray,
+    present: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(start, owner, other)``: for every robot, the robots and seeds (``n + seed index``)
-    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. One grid
-    lookup per offset, never a loop over robots."""
+    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. Robots not
+    `present` (removed by a fault) neither sense nor are sensed. One grid lookup per offset,
+    never a loop over robots."""
     n = len(cell)
+    here = np.arange(n) if present is None else np.flatnonzero(present)
     r = int(np.abs(reach).max()) if len(reach) else 0
     who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
-    who[cell[:, 0] + r, cell[:, 1] + r] = np.arange(n)
+    who[cell[here, 0] + r, cell[here, 1] + r] = here
     who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
     owners, others = [], []
     for dx, dy in reach:
-        found = who[cell[:, 0] + r + dx, cell[:, 1] + r + dy]
-        hit = np.flatnonzero(found >= 0)
-        owners.append(hit)
+        found = who[cell[here, 0] + r + dx, cell[here, 1] + r + dy]
+        hit = found >= 0
+        owners.append(here[hit])
         others.append(found[hit])
     owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
     other = np.concatenate(others) if others else np.zeros(0, dtype=np.int64)

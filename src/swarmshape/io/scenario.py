@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from PIL import ImageColor
 
+from swarmshape.core.faults import check_rate, events_from_values
 from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.world import GroupSpec, World
 from swarmshape.errors import InputError
@@ -37,7 +38,8 @@ from swarmshape.io.files import readable_file
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
 
-TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel"}
+TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel",
+            "faults", "failure_rate"}  # fmt: skip
 GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
 POSE_KEYS = {"x", "y", "rotation"}
 
@@ -130,6 +132,12 @@ def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
     for key in ("max_speed", "max_accel"):
         if key in settings:
             settings[key] = float(where.typed(settings[key], (int, float), key))
+    if "faults" in settings:
+        settings["faults"] = events_from_values(settings["faults"], f"{where.path}: faults")
+    if "failure_rate" in settings:
+        settings["failure_rate"] = check_rate(
+            settings["failure_rate"], f"{where.path}: failure_rate"
+        )
     return settings
 
 

@@ -2,7 +2,8 @@
 
 The world is scaled to whole pixels per cell and centred in the given area. Grey cells are the
 targets, green squares the seeds; agents take their group's colour, brightest while moving,
-slightly darker once settled, pale while waiting or wandering.
+slightly darker once settled, pale while waiting or wandering; stalled robots are charcoal, and
+where a fault removed robots a red cross shows for `LOST_MARK_STEPS` steps.
 """
 
 from __future__ import annotations
@@ -21,6 +22,10 @@ TARGET = (196, 196, 196)
 SEED_GREEN = (34, 160, 60)
 LABEL_BACK = (38, 40, 46)
 LABEL_TEXT = (235, 235, 235)
+LOST_RED = (214, 40, 40)
+STALLED_GREY = (64, 64, 70)
+LOST_MARK_STEPS = 60
+"""Steps for which a removed robot's last cell is marked."""
 LABEL_SHARE = 1 / 22
 """A frame's text line is this share of its height (at least 14 pixels)."""
 
@@ -29,6 +34,8 @@ SHADES = (  # indexed by State
     lambda rgb: rgb,  # moving: the group's colour
     lambda rgb: tuple(int(c * 0.62) for c in rgb),  # settled: darker
     lambda rgb: tuple(int(c + (255 - c) * 0.35) for c in rgb),  # wandering: light
+    lambda rgb: STALLED_GREY,  # stalled: charcoal, whatever the group
+    lambda rgb: rgb,  # lost: never drawn
 )
 
 
@@ -69,8 +76,11 @@ class Renderer:
         if swarm is None:
             return
         gap = 1 if cell >= 4 else 0
+        here = swarm.present
         corner = np.floor((swarm.positions() - 0.5) * cell + np.array(origin) + gap).astype(int)
-        kind = swarm.group * len(SHADES) + swarm.state
+        self._lost_marks(surface, swarm, cell, origin)
+        corner = corner[here]
+        kind = (swarm.group * len(SHADES) + swarm.state)[here]
         order = np.argsort(kind, kind="stable")
         bounds = np.searchsorted(kind[order], np.arange(len(self.world.groups) * len(SHADES) + 1))
         corners = corner[order].tolist()
@@ -78,6 +88,19 @@ class Renderer:
             if start < stop:  # one blit call per colour draws all its squares
                 square = self._square(cell - 2 * gap, index)
                 surface.fblits(zip(repeat(square), corners[start:stop]))
+
+    def _lost_marks(
+        self, surface: pygame.Surface, swarm: Swarm, cell: int, origin: tuple[int, int]
+    ) -> None:
+        """A red cross on the last cell of each robot removed in the last few steps."""
+        lost_at = swarm.faults.lost_at
+        recent = np.flatnonzero((lost_at >= 0) & (lost_at >= swarm.step_count - LOST_MARK_STEPS))
+        width = max(1, cell // 6)
+        for x, y in (swarm.cell[recent] * cell + np.array(origin)).tolist():
+            inset = max(1, cell // 5)
+            low, high = inset, cell - 1 - inset
+            pygame.draw.line(surface, LOST_RED, (x + low, y + low), (x + high, y + high), width)
+            pygame.draw.line(surface, LOST_RED, (x + low, y + high), (x + high, y + low), width)
 
     def _background_at(self, cell: int) -> pygame.Surface:
         width, height = self.world.size
@@ -95,7 +118,8 @@ class Renderer:
         return background
 
     def _square(self, side: int, index: int) -> pygame.Surface:
-        """A filled square for group ``index // 4`` in state ``index % 4``, made once."""
+        """A filled square for group ``index // len(SHADES)`` in state ``index % len(SHADES)``,
+        made once."""
         key = (side, index)
         if key not in self._squares:
             group, state = divmod(index, len(SHADES))
