@@ -135,6 +135,8 @@ def quarter_turns(poses: list[Pose]) -> np.ndarray:
 def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
     """Rotate integer or float vectors ``(k, 2)`` by per-row quarter turns, clockwise on screen."""
     out = np.array(vectors, dtype=np.result_type(vectors, np.int64), copy=True)
+    if not turns.any():  # the usual case: every seed frame has the world's axes
+        return out
     for _ in range(3):
         rows = turns > 0
         out[rows] = np.column_stack([-out[rows, 1], out[rows, 0]])
@@ -146,22 +148,18 @@ def neighbours(
     cell: np.ndarray, seeds: np.ndarray, size: tuple[int, int], reach: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(start, owner, other)``: for every robot, the robots and seeds (``n + seed index``)
-    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. One grid
-    lookup per offset, never a loop over robots."""
+    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. One gather of
+    every robot's every offset from a padded grid of who is where, never a loop over robots."""
     n = len(cell)
     r = int(np.abs(reach).max()) if len(reach) else 0
     who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
     who[cell[:, 0] + r, cell[:, 1] + r] = np.arange(n)
     who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
-    owners, others = [], []
-    for dx, dy in reach:
-        found = who[cell[:, 0] + r + dx, cell[:, 1] + r + dy]
-        hit = np.flatnonzero(found >= 0)
-        owners.append(hit)
-        others.append(found[hit])
-    owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
-    other = np.concatenate(others) if others else np.zeros(0, dtype=np.int64)
-    order = np.argsort(owner, kind="stable")
-    owner, other = owner[order], other[order]
+    stride = who.shape[1]
+    base = (cell[:, 0] + r) * stride + (cell[:, 1] + r)
+    found = who.ravel()[base[:, None] + (reach[:, 0] * stride + reach[:, 1])[None, :]]
+    hit = np.flatnonzero(found >= 0)  # row-major: by robot, then in reach order
+    owner = hit // max(1, len(reach))
+    other = found.ravel()[hit]
     start = np.searchsorted(owner, np.arange(n + 1))
     return start, owner, other
