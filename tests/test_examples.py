@@ -14,6 +14,9 @@ PROMISES = {
     "headless.py": "robots formed it in",
     "my_strategy.py": "no problems found",
     "frames.py": "frames of shape (200, 320, 3) and dtype uint8",
+    "learn_random.py": "a frame of shape (400, 640, 3)",
+    "learn_scripted.py": "shape formed: True, coverage 100%",
+    "learn_cem.py": "coverage with the trained policy: 33% (from 0%)",
 }
 
 

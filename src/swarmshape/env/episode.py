@@ -12,6 +12,7 @@ import numpy as np
 from gymnasium import spaces
 
 from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Blueprint
 from swarmshape.core.shape import Shape
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
@@ -98,6 +99,9 @@ class Episode:
         self.reward = reward if reward is not None else CoverageShare()
         self.robots = self.world.agents
         self.max_steps = self.config.max_steps
+        self.blueprint = Blueprint.of([g.frame_cells for g in self.world.groups])
+        """What every robot knows from the start: its group's shape in its seed frame (the
+        same for every step, so not repeated in observations)."""
         self.observation_space = self._observation_space()
         self.action_space = self._action_space()
         self.swarm: Swarm | None = None
@@ -212,6 +216,16 @@ class Host:
         self.episode = Episode(shape, **options)
         self.screen = Screen(render_mode, render_size)
         self.render_mode = render_mode
+
+    @property
+    def layout(self) -> Layout:
+        """Where each value sits in an observation."""
+        return self.episode.layout
+
+    @property
+    def blueprint(self) -> Blueprint:
+        """Every group's shape in its seed frame, as each robot knows it."""
+        return self.episode.blueprint
 
     def render(self) -> np.ndarray | None:
         return self.screen.render(self.episode.swarm)
