@@ -208,6 +208,7 @@ def test_forming_the_shape_terminates_every_agent_and_the_rewards_add_up_to_cove
     assert all(terminations.values()) and not any(truncations.values())
     assert set(terminations) == set(env.possible_agents)
     assert env.agents == [] and env.coverage() == 1.0
+    assert env.state() in env.state_space
     assert total == pytest.approx(1.0)  # the rewards add up to the change in coverage
     assert env.step({}) == ({}, {}, {}, {}, {})
 
@@ -223,6 +224,12 @@ def test_the_step_limit_truncates_and_the_batched_interface_resets_on_the_next_s
     assert vec.episode.swarm.step_count == 0
     with pytest.raises(ValueError, match="every robot"):
         vec.reset(options={"reset_mask": np.arange(vec.num_envs) == 0})
+
+
+def test_an_episode_is_1000_steps_unless_told():
+    assert learn.vector_env(SQUARE).episode.max_steps == learn.EPISODE_STEPS == 1000
+    assert learn.vector_env(SQUARE, max_steps=None).episode.max_steps == 1000
+    assert learn.vector_env(SQUARE, max_steps=7).episode.max_steps == 7
 
 
 def test_actions_are_checked():

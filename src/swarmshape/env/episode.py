@@ -68,7 +68,8 @@ class Episode:
         for name, why in NOT_OPTIONS.items():
             if name in options:
                 raise InputError(f"{name} is not an environment option: {why}")
-        options.setdefault("max_steps", EPISODE_STEPS)
+        if options.get("max_steps") is None:
+            options["max_steps"] = EPISODE_STEPS
         if shape is None or isinstance(shape, str | Path):
             self.config = configure(shape, strategy=NAME, **options)
             self.world = load_world(self.config)

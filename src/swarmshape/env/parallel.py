@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 from gymnasium.utils import seeding
 from pettingzoo import ParallelEnv
 
@@ -28,6 +29,8 @@ class SwarmEnv(Host, ParallelEnv):
     def __init__(self, shape: str | Path | np.ndarray | None = None, **options: Any) -> None:
         Host.__init__(self, shape, **options)
         self.possible_agents = [f"robot_{i}" for i in range(self.episode.robots)]
+        width, height = self.episode.world.size
+        self.state_space = spaces.Box(0, max(width, height) - 1, (self.episode.robots, 2), np.int64)
         self.agents: list[str] = []
         self._np_random: np.random.Generator | None = None
         self._np_random_seed: int | None = None
@@ -83,7 +86,8 @@ class SwarmEnv(Host, ParallelEnv):
         self.screen.close()
 
     def state(self) -> np.ndarray:
-        """A global view for centralised critics: every robot's cell ``(n, 2)``, world axes."""
+        """A global view for centralised critics: every robot's cell ``(n, 2)`` in world axes
+        (in `state_space`)."""
         return self.episode.swarm.cell.copy()
 
 
