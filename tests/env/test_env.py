@@ -49,7 +49,8 @@ def test_pettingzoo_aec_api_test_passes_on_the_converted_environment():
         api_test(learn.raw_env(shape=SQUARE, max_steps=30), num_cycles=100)
         # with messages the action space is MultiDiscrete, which the test merely advises against
         warnings.filterwarnings("ignore", "Action space for each agent probably should be")
-        api_test(learn.raw_env(shape=SQUARE, max_steps=30, message_size=1), num_cycles=100)
+        aec = learn.raw_env(shape=SQUARE, max_steps=30, message_size=1, message_range=(3, 6))
+        api_test(aec, num_cycles=100)  # messages not heard yet read 0, outside 3..6
 
 
 def test_created_through_pettingzoos_registry():

@@ -94,7 +94,7 @@ class Episode:
         self.message_range = (int(low), int(high))
         self.relay = Relay(senses, message_size)
         self.layout = Layout(neighbours, message_size)
-        self.reach = math.ceil(senses.radius) + 2 + math.ceil(8 * senses.distance_noise)
+        self.offset_bound = math.ceil(senses.radius) + 2 + math.ceil(8 * senses.distance_noise)
         """Offsets are clipped to this (8 standard deviations of noise beyond the farthest
         neighbour, which may be a cell ahead of its own, as may the robot)."""
         self.reward = reward if reward is not None else CoverageShare()
@@ -123,9 +123,10 @@ class Episode:
         frame = max(1, int(np.abs(np.concatenate(frames)).max()))
         for bound, sign in ((low, -1), (high, 1)):
             slots = layout.slots(bound)
-            slots[:, DX : DY + 1] = sign * self.reach
+            slots[:, DX : DY + 1] = sign * self.offset_bound
             slots[:, FRAME_X : FRAME_Y + 1] = sign * frame
-            slots[:, len(SLOT) :] = self.message_range[sign > 0]
+            # a neighbour not heard, or not yet broadcasting, shows zeros
+            slots[:, len(SLOT) :] = sign * max(0, sign * self.message_range[sign > 0])
         return spaces.Box(low, high, dtype=np.float32)
 
     def _action_space(self) -> spaces.Discrete | spaces.MultiDiscrete:
@@ -149,7 +150,7 @@ class Episode:
         return self.observe()
 
     def observe(self) -> np.ndarray:
-        return encode(self.control.look(), self.layout, self.reach)
+        return encode(self.control.look(), self.layout, self.offset_bound)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool, bool]:
         """One step with every robot's action (``(n,)`` moves, or ``(n, 1 + message_size)``

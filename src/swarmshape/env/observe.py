@@ -67,8 +67,8 @@ class Layout:
         return obs[..., len(OWN) :].reshape(*obs.shape[:-1], self.neighbours, self.slot_size)
 
 
-def encode(sense: Perception, layout: Layout, reach: float) -> np.ndarray:
-    """Every robot's observation ``(n, size)`` float32; offsets clipped to ``±reach``."""
+def encode(sense: Perception, layout: Layout, bound: float) -> np.ndarray:
+    """Every robot's observation ``(n, size)`` float32; offsets clipped to ``±bound``."""
     n, k = len(sense), layout.neighbours
     obs = np.zeros((n, layout.size), dtype=np.float32)
     own = obs[:, : len(OWN)]
@@ -85,7 +85,7 @@ def encode(sense: Perception, layout: Layout, reach: float) -> np.ndarray:
 
     entries = np.empty((len(keep), layout.slot_size), dtype=np.float32)
     entries[:, PRESENT] = 1.0
-    entries[:, DX : DY + 1] = np.clip(kept(sense.offset), -reach, reach)
+    entries[:, DX : DY + 1] = np.clip(kept(sense.offset), -bound, bound)
     entries[:, SEED] = kept(sense.seed)
     entries[:, KIN] = kept(sense.kin)
     entries[:, HEARD] = kept(sense.heard)
