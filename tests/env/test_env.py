@@ -227,6 +227,29 @@ def test_the_step_limit_truncates_and_the_batched_interface_resets_on_the_next_s
         vec.reset(options={"reset_mask": np.arange(vec.num_envs) == 0})
 
 
+def test_any_callable_can_be_the_reward():
+    class Spread:
+        """Rewards robots by how far they are from robot 0; told of each new episode."""
+
+        episodes = 0
+
+        def reset(self, swarm):
+            self.episodes += 1
+
+        def __call__(self, swarm):
+            return np.abs(swarm.cell - swarm.cell[0]).sum(axis=1).astype(float)
+
+    spread = Spread()
+    vec = learn.vector_env(SQUARE, reward=spread)
+    vec.reset(seed=1)
+    _, rewards, *_ = vec.step(np.zeros(vec.num_envs, dtype=np.int64))
+    assert spread.episodes == 1 and rewards[0] == 0 and rewards[1:].min() > 0
+    plain = learn.vector_env(SQUARE, reward=lambda swarm: np.ones(2))
+    plain.reset(seed=1)
+    with pytest.raises(ValueError, match="the reward gave shape"):
+        plain.step(np.zeros(plain.num_envs, dtype=np.int64))
+
+
 def test_an_episode_is_1000_steps_unless_told():
     assert learn.vector_env(SQUARE).episode.max_steps == learn.EPISODE_STEPS == 1000
     assert learn.vector_env(SQUARE, max_steps=None).episode.max_steps == 1000
