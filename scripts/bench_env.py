@@ -9,6 +9,8 @@ clock also counts other people's work):
 - the batched interface (`vector_env`): what issue 14 holds to 500 steps/s;
 - the same swarm stepped by the relay alone, sensing but not encoding observations: the
   simulator's own cost of a step of a local program;
+- the same, with the robots packed in a square block (about 25 neighbours each, as in a formed
+  shape, against about 5 at the start of a formation): observations are then mostly full;
 - the PettingZoo interface (a dict per robot per step), for comparison;
 - and, to show how busy the machine is, `scripts/bench.py`'s headless steps/s at the same size
   (the central ``optimal`` strategy), which the README gives for a quiet machine.
@@ -19,7 +21,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import tempfile
 import time
+import warnings
 from collections.abc import Callable
 
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
@@ -27,7 +31,8 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import numpy as np
 
 from bench import disc, steps_per_second
-from swarmshape.env import parallel_env, vector_env
+from swarmshape.env import SwarmVectorEnv, parallel_env, vector_env
+from swarmshape.io.bitmap import ShapeWarning
 
 TARGET = 500
 
@@ -41,6 +46,19 @@ def timed(run: Callable[[], int]) -> tuple[float, float]:
         wall.append(steps / (time.perf_counter() - start))
         cpu.append(steps / max(time.process_time() - start_cpu, 1e-9))
     return max(wall), max(cpu)
+
+
+def packed_env(robots: int, max_steps: int) -> SwarmVectorEnv:
+    """A 2x2 shape in a wide arena, its robots starting in one square block round the centre."""
+    grid = np.ones((2, 2), dtype=bool)
+    side = int(np.sqrt(robots)) * 2 + 10
+    warnings.simplefilter("ignore", ShapeWarning)  # far more robots than cells, on purpose
+    free = vector_env(grid, agents=robots, arena=(side, side)).episode.world.start_cells()
+    block = free[np.argsort(np.abs(free - side // 2).max(axis=1), kind="stable")[:robots]]
+    with tempfile.TemporaryDirectory() as folder:
+        start = os.path.join(folder, "start.csv")
+        np.savetxt(start, block, fmt="%d", delimiter=",", header="x,y", comments="")
+        return vector_env(grid, agents=robots, arena=(side, side), start=start, max_steps=max_steps)
 
 
 def main() -> None:
@@ -68,6 +86,14 @@ def main() -> None:
             episode.control.look()
         return len(moves)
 
+    packed = packed_env(args.robots, args.steps + 1)
+
+    def batched_packed() -> int:
+        packed.reset(seed=1)
+        for row in moves:
+            packed.step(row)
+        return len(moves)
+
     par = parallel_env(shape, max_steps=args.steps + 1)
     agents = par.possible_agents
 
@@ -86,6 +112,7 @@ def main() -> None:
     rows = [
         ("batched (vector_env)", timed(batched), TARGET),
         ("simulator alone (sense + step)", timed(simulator), None),
+        ("batched, robots packed", timed(batched_packed), None),
         ("PettingZoo dicts (parallel_env)", timed(per_agent), None),
     ]
     central = max(steps_per_second(args.robots, 400)["steps_per_s"] for _ in range(3))

@@ -95,8 +95,8 @@ class Episode:
         self.relay = Relay(senses, message_size)
         self.layout = Layout(neighbours, message_size)
         self.offset_bound = math.ceil(senses.radius) + 2 + math.ceil(8 * senses.distance_noise)
-        """Offsets are clipped to this (8 standard deviations of noise beyond the farthest
-        neighbour, which may be a cell ahead of its own, as may the robot)."""
+        """Offsets lie within this (the farthest neighbour may be a cell ahead of its own, as
+        may the robot); noisy ones are clipped to it, 8 standard deviations out."""
         self.reward = reward if reward is not None else CoverageShare()
         self.robots = self.world.agents
         self.max_steps = self.config.max_steps
@@ -150,7 +150,8 @@ class Episode:
         return self.observe()
 
     def observe(self) -> np.ndarray:
-        return encode(self.control.look(), self.layout, self.offset_bound)
+        noisy = self.config.distance_noise > 0
+        return encode(self.control.look(), self.layout, self.offset_bound if noisy else None)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool, bool]:
         """One step with every robot's action (``(n,)`` moves, or ``(n, 1 + message_size)``

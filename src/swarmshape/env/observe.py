@@ -67,8 +67,9 @@ class Layout:
         return obs[..., len(OWN) :].reshape(*obs.shape[:-1], self.neighbours, self.slot_size)
 
 
-def encode(sense: Perception, layout: Layout, bound: float) -> np.ndarray:
-    """Every robot's observation ``(n, size)`` float32; offsets clipped to ``±bound``."""
+def encode(sense: Perception, layout: Layout, bound: float | None = None) -> np.ndarray:
+    """Every robot's observation ``(n, size)`` float32; offsets clipped to ``±bound`` if given
+    (noise can carry them past any bound; without noise they stay within ``radius + 2``)."""
     n, k = len(sense), layout.neighbours
     obs = np.zeros((n, layout.size), dtype=np.float32)
     own = obs[:, : len(OWN)]
@@ -83,15 +84,18 @@ def encode(sense: Perception, layout: Layout, bound: float) -> np.ndarray:
     def kept(values: np.ndarray) -> np.ndarray:  # np.take: far faster than values[keep]
         return values if len(keep) == len(rank) else np.take(values, keep, axis=0)
 
-    entries = np.empty((len(keep), layout.slot_size), dtype=np.float32)
-    entries[:, PRESENT] = 1.0
-    entries[:, DX : DY + 1] = np.clip(kept(sense.offset), -bound, bound)
-    entries[:, SEED] = kept(sense.seed)
-    entries[:, KIN] = kept(sense.kin)
-    entries[:, HEARD] = kept(sense.heard)
-    entries[:, FRAME_X : FRAME_Y + 1] = kept(sense.seed_frame)
-    entries[:, len(SLOT) :] = kept(sense.message)
-    layout.slots(obs)[kept(sense.owner), kept(rank)] = entries
+    # built field by field in contiguous rows (casting into columns is several times slower)
+    fields = np.empty((layout.slot_size, len(keep)), dtype=np.float32)
+    fields[PRESENT] = 1.0
+    fields[DX : DY + 1] = kept(sense.offset).T
+    if bound is not None:
+        np.clip(fields[DX : DY + 1], -bound, bound, out=fields[DX : DY + 1])
+    fields[SEED] = kept(sense.seed)
+    fields[KIN] = kept(sense.kin)
+    fields[HEARD] = kept(sense.heard)
+    fields[FRAME_X : FRAME_Y + 1] = kept(sense.seed_frame).T
+    fields[len(SLOT) :] = kept(sense.message).T
+    layout.slots(obs)[kept(sense.owner), kept(rank)] = np.ascontiguousarray(fields.T)
     return obs
 
 
