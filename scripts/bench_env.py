@@ -25,6 +25,7 @@ import tempfile
 import time
 import warnings
 from collections.abc import Callable
+from typing import Any
 
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
@@ -48,7 +49,7 @@ def timed(run: Callable[[], int]) -> tuple[float, float]:
     return max(wall), max(cpu)
 
 
-def packed_env(robots: int, max_steps: int) -> SwarmVectorEnv:
+def packed_env(robots: int, max_steps: int, **options: Any) -> SwarmVectorEnv:
     """A 2x2 shape in a wide arena, its robots starting in one square block round the centre."""
     grid = np.ones((2, 2), dtype=bool)
     side = int(np.sqrt(robots)) * 2 + 10
@@ -58,7 +59,9 @@ def packed_env(robots: int, max_steps: int) -> SwarmVectorEnv:
     with tempfile.TemporaryDirectory() as folder:
         start = os.path.join(folder, "start.csv")
         np.savetxt(start, block, fmt="%d", delimiter=",", header="x,y", comments="")
-        return vector_env(grid, agents=robots, arena=(side, side), start=start, max_steps=max_steps)
+        return vector_env(
+            grid, agents=robots, arena=(side, side), start=start, max_steps=max_steps, **options
+        )
 
 
 def main() -> None:
