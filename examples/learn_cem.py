@@ -21,8 +21,8 @@ layout = env.layout
 
 
 def features(obs: np.ndarray) -> np.ndarray:
-    """Per robot ``(n, 8)``: a bias, hears a seed, frame cell (and again if it hears one),
-    mean offset of neighbouring robots, their number / 8."""
+    """Per robot ``(n, 7)``: a bias, hears a seed, its frame cell if it does (else 0, 0), the
+    mean offset of the robots around it, their number / 8."""
     slots = layout.slots(obs)
     seed = slots[:, :, SEED] > 0
     hears = seed.any(axis=1)
@@ -32,8 +32,7 @@ def features(obs: np.ndarray) -> np.ndarray:
     count = robots.sum(axis=1)
     around = (slots[:, :, [DX, DY]] * robots[:, :, None]).sum(axis=1)
     around /= np.maximum(count, 1)[:, None]
-    return np.column_stack([np.ones(len(obs)), hears, where, where * hears[:, None], around,
-                            count / 8])  # fmt: skip
+    return np.column_stack([np.ones(len(obs)), hears, where, around, count / 8])
 
 
 def score(weights: np.ndarray, seed: int = 11) -> float:
@@ -53,7 +52,7 @@ shape = (5, features(env.reset(seed=0)[0]).shape[1])  # 5 moves x features
 mean, spread = np.zeros(shape), np.ones(shape)
 before = score(mean + rng.normal(0, 1e-3, shape))
 print(f"coverage with the untrained policy: {before:.0%}")
-for generation in range(5):
+for generation in range(8):
     candidates = mean + spread * rng.normal(size=(12, *shape))
     scores = np.array([score(w) for w in candidates])
     elite = candidates[np.argsort(scores)[-3:]]
