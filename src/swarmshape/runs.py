@@ -25,9 +25,11 @@ import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.faults import FaultEvent, Faults, check_rate, events_from_values
+from swarmshape.core.local import Program
 from swarmshape.core.motion import Limits
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
+from swarmshape.core.steering import Strategy
 from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import World, build_world
 from swarmshape.errors import InputError
@@ -223,9 +225,18 @@ def build(config: RunConfig) -> Swarm:
     return start_swarm(config, world, start)
 
 
-def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None) -> Swarm:
-    """A swarm on a given world (a painted one, say), run as `config` says."""
-    strategy = strategies.create(config.strategy, order=config.order, senses=config.senses())
+def start_swarm(
+    config: RunConfig,
+    world: World,
+    start: np.ndarray | None = None,
+    plugin: Strategy | Program | None = None,
+) -> Swarm:
+    """A swarm on a given world (a painted one, say), run as `config` says, by `plugin` if
+    given (a plug-in object made elsewhere: the learning environment's relay of a trainer's
+    actions) instead of a new `config.strategy`."""
+    strategy = plugin or strategies.create(
+        config.strategy, order=config.order, senses=config.senses()
+    )
     limits = Limits(config.max_speed, config.max_accel)
     params = Params(limits=limits, speed_variation=config.speed_variation)
     faults = Faults(config.faults, config.failure_rate)

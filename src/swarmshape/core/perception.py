@@ -123,6 +123,8 @@ def quarter_turns(poses: list[Pose]) -> np.ndarray:
 def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
     """Rotate integer or float vectors ``(k, 2)`` by per-row quarter turns, clockwise on screen."""
     out = np.array(vectors, dtype=np.result_type(vectors, np.int64), copy=True)
+    if not turns.any():  # the usual case: every seed frame has the world's axes
+        return out
     for _ in range(3):
         rows = turns > 0
         out[rows] = np.column_stack([-out[rows, 1], out[rows, 0]])
@@ -139,23 +141,19 @@ def neighbours(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(start, owner, other)``: for every robot, the robots and seeds (``n + seed index``)
     whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. Robots not
-    `present` (removed by a fault) neither sense nor are sensed. One grid lookup per offset,
-    never a loop over robots."""
+    `present` (removed by a fault) neither sense nor are sensed. One gather of every robot's
+    every offset from a padded grid of who is where, never a loop over robots."""
     n = len(cell)
     here = np.arange(n) if present is None else np.flatnonzero(present)
     r = int(np.abs(reach).max()) if len(reach) else 0
     who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
     who[cell[here, 0] + r, cell[here, 1] + r] = here
     who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
-    owners, others = [], []
-    for dx, dy in reach:
-        found = who[cell[here, 0] + r + dx, cell[here, 1] + r + dy]
-        hit = found >= 0
-        owners.append(here[hit])
-        others.append(found[hit])
-    owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
-    other = np.concatenate(others) if others else np.zeros(0, dtype=np.int64)
-    order = np.argsort(owner, kind="stable")
-    owner, other = owner[order], other[order]
+    stride = who.shape[1]
+    base = (cell[here, 0] + r) * stride + (cell[here, 1] + r)
+    found = who.ravel()[base[:, None] + (reach[:, 0] * stride + reach[:, 1])[None, :]]
+    hit = np.flatnonzero(found >= 0)  # row-major: by robot, then in reach order
+    owner = here[hit // max(1, len(reach))]
+    other = found.ravel()[hit]
     start = np.searchsorted(owner, np.arange(n + 1))
     return start, owner, other
