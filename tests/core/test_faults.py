@@ -3,6 +3,8 @@ way for the same seed, and a run saved mid-fault resumes byte for byte."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -52,10 +54,18 @@ def schedule(kind: str, world, step: int) -> tuple[FaultEvent, ...]:
     return (event,)
 
 
+@functools.cache
+def formed_at(strategy: str, spares: int, seed: int) -> int:
+    """The step at which the block first formed without faults: when the faults strike."""
+    swarm = Swarm(world_of(BLOCK, BLOCK.sum() + spares), create(strategy), seed)
+    Runner(swarm, max_steps=20_000).finish()
+    assert swarm.complete
+    return swarm.step_count
+
+
 def watched_run(strategy: str, kind: str, spares: int, seed: int = 5):
     world = world_of(BLOCK, BLOCK.sum() + spares)
-    formed = {"optimal": 60, "greedy": 80, "random": 200, "paper": 1500}[strategy]
-    faults = Faults(schedule(kind, world, formed))
+    faults = Faults(schedule(kind, world, formed_at(strategy, spares, seed)))
     swarm = Swarm(world, create(strategy), seed, faults=faults)
     watch = InvariantWatch()
     Runner(swarm, [watch], max_steps=20_000).finish()
