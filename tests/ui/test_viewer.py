@@ -11,6 +11,7 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.strategies import create
 from swarmshape.ui.viewer import SPEEDS, Viewer
 from tests.conftest import grid_from, make_swarm, world_of
+from tests.ui.test_render import Shown
 
 SHAPE = grid_from("""
 ####
@@ -220,5 +221,27 @@ def test_the_fault_tool_removes_a_clicked_robot_and_a_dragged_rectangle(tmp_path
         while not view.swarm.complete:
             view.tick()
         assert view.swarm.overlap_total == 0 and view.swarm.filled.all()
+    finally:
+        pygame.quit()
+
+
+def test_g_l_o_toggle_a_local_programs_overlays_and_say_so(viewer, tmp_path):
+    press(viewer, pygame.K_g)  # the fixture runs the central `paper` strategy
+    assert viewer.overlays == set() and "no local program" in viewer.notice
+    view = Viewer(
+        lambda world: Swarm(world, Shown(), 3),
+        world_of(SHAPE),
+        title="bar.png",
+        size=(640, 400),
+        fps=0,
+        screenshots=tmp_path,
+    )
+    try:
+        for key in (pygame.K_g, pygame.K_l, pygame.K_o):
+            press(view, key)
+        assert view.overlays == {"values", "links", "error"}
+        assert "showing error links values" in view.status()
+        press(view, pygame.K_l)
+        assert view.overlays == {"values", "error"} and view.notice == "links overlay off"
     finally:
         pygame.quit()

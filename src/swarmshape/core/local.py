@@ -87,6 +87,10 @@ class Program:
     states: ClassVar[tuple[str, ...]] = ()
     """Names of the values of ``memory.state``, if the program keeps one (the viewer colours
     robots by it)."""
+    shown: ClassVar[str | None] = None
+    """The integer memory slot the viewer can print on each robot (a gradient, a hop count), so
+    a program's field can be seen without a debugger; values 0 to 998 are printed, others
+    (999 or more, negative) mean "unknown" and are left blank."""
 
     def __init__(self, senses: Senses | None = None) -> None:
         self.senses = senses or Senses()
@@ -140,6 +144,9 @@ class LocalControl:
         self.sent = 0
         self.lost = 0
         self.quiet_steps = 0
+        self.links: tuple[np.ndarray, np.ndarray] | None = None
+        """The last perception's heard links, ``(owner, other)`` (other ``>= n``: a seed), kept
+        for the viewer to draw: perceiving again would draw from the run's generator."""
         self.number = np.zeros(n, dtype=np.int64)
         for group in range(len(swarm.world.groups)):
             mine = swarm.group == group
@@ -225,6 +232,7 @@ class LocalControl:
         self.lost += int((~heard & ~seed).sum())
         silent = np.concatenate([swarm.state == STALLED, np.zeros(len(seeds), dtype=bool)])
         heard &= ~silent[other]
+        self.links = (owner[heard], other[heard])
         robot = heard & ~seed
         message = np.zeros((len(owner), self.program.message_size), dtype=np.int64)
         message[robot] = np.take(self.broadcast, other[robot], axis=0)

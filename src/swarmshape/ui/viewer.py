@@ -7,7 +7,9 @@ every robot at rest, no swarm yet) a tick waits for an event instead, and draws 
 came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
 running; Enter (or `e` again) hands the painted shape to the swarm, or starts one if none runs
 yet. `x` toggles the fault tool: a click removes the robot under the cursor, a drag removes
-every robot in the rectangle.
+every robot in the rectangle. Under a local program, robots take the colours of its states (a
+legend in the corner names them) and `g`, `l`, `o` toggle the overlays: its gradient values,
+its communication links, and its localisation error.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write
 from swarmshape.ui.editor import HELP_LINES, Canvas, Editor
-from swarmshape.ui.render import Renderer
+from swarmshape.ui.render import VALUE_MIN_CELL, Renderer, legend, program_of
 
 FAULT_EVENTS = (pygame.MOUSEBUTTONDOWN, pygame.MOUSEMOTION, pygame.MOUSEBUTTONUP)
 
@@ -44,8 +46,12 @@ HUD_BACK = (38, 40, 46)
 HUD_TEXT = (235, 235, 235)
 HUD_DIM = (150, 155, 165)
 HELP = (
-    "Space pause   . step   + - speed   r restart   e edit   x fault tool   F12 screenshot   q quit"
+    "Space pause   . step   + - speed   r restart   e edit   x fault tool   "
+    "g l o overlays   F12 screenshot   q quit"
 )
+OVERLAY_KEYS = {pygame.K_g: "values", pygame.K_l: "links", pygame.K_o: "error"}
+"""Keys that toggle `render.OVERLAYS`: a local program's gradient values, communication links
+and localisation error."""
 FAULT_HELP = "fault tool: click removes a robot, drag removes all in a rectangle   x: done"
 DRAG_RED = (214, 40, 40)
 
@@ -107,6 +113,8 @@ class Viewer:
         self._drag_from: tuple[int, int] | None = None
         """The cell a fault-tool drag started on."""
         self._drag_to: tuple[int, int] | None = None
+        self.overlays: set[str] = set()
+        """What `render.Renderer.draw` draws over a local program's robots."""
         if not start:
             self.start_editing()
 
@@ -235,6 +243,27 @@ class Viewer:
             self.fault_tool = not self.fault_tool
             self._drag_from = self._drag_to = None
             self.notice = FAULT_HELP if self.fault_tool else "fault tool off"
+        elif key in OVERLAY_KEYS:
+            self.toggle_overlay(OVERLAY_KEYS[key])
+
+    def toggle_overlay(self, name: str) -> None:
+        """Switch one overlay on or off and say so, or say why it would show nothing."""
+        program = program_of(self.swarm)
+        if program is None:
+            self.notice = "no local program: overlays show a local program's values and links"
+            return
+        if name in self.overlays:
+            self.overlays.discard(name)
+            self.notice = f"{name} overlay off"
+            return
+        self.overlays.add(name)
+        self.notice = f"{name} overlay on"
+        if name == "values" and program.shown is None:
+            self.notice += f": {program.name} shows no memory slot (Program.shown)"
+        elif name == "values" and self.renderer.fit(self._world_area())[0] < VALUE_MIN_CELL:
+            self.notice += ": cells too small to read, enlarge the window"
+        elif name == "error" and program.estimate(self.swarm.driver.memory) is None:
+            self.notice += f": {program.name} does not localise (Program.estimate)"
 
     def step(self) -> None:
         self.swarm.step()
@@ -337,7 +366,9 @@ class Viewer:
 
     def draw(self) -> None:
         area = self._world_area()
-        self.renderer.draw(self.screen, self.swarm, area)
+        self.renderer.draw(self.screen, self.swarm, area, self.overlays)
+        if not self.editing:
+            self._legend(area)
         if self._drag_from is not None and self._drag_to is not None:
             first = self.renderer.cell_rect(self._drag_from, area)
             pygame.draw.rect(
@@ -354,6 +385,20 @@ class Viewer:
         self.screen.fill(HUD_BACK, (0, 0, width, HUD_HEIGHT))
         self._text(self.status(), (10, 6), HUD_TEXT)
         self._text(self._second_line(), (10, 27), HUD_DIM)
+
+    def _legend(self, area: pygame.Rect) -> None:
+        """The local program's state colours, in the arena's bottom-left corner."""
+        entries = legend(self.swarm)
+        if not entries:
+            return
+        width = max(self.font.size(name)[0] for name, _ in entries) + 38
+        panel = pygame.Rect(0, 0, width, 20 * len(entries) + 8)
+        panel.bottomleft = (area.left + 8, area.bottom - 8)
+        self.screen.fill(HUD_BACK, panel)
+        for row, (name, colour) in enumerate(entries):
+            y = panel.y + 5 + 20 * row
+            self.screen.fill(colour, (panel.x + 8, y + 2, 14, 14))
+            self._text(name, (panel.x + 30, y + 1), HUD_TEXT)
 
     def _help_panel(self, area: pygame.Rect) -> pygame.Rect:
         """The corner of `area` where the help covers the fewest seeds, then painted cells."""
@@ -403,6 +448,8 @@ class Viewer:
             formed += f"   lost {swarm.faults.lost}"
         if self.fault_tool:
             formed += "   FAULT TOOL"
+        if self.overlays and program_of(swarm) is not None:
+            formed += "   showing " + " ".join(sorted(self.overlays))
         return (
             f"step {swarm.step_count}{limit}   settled {settled}/{len(swarm.filled)}   "
             f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "
