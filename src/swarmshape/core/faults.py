@@ -19,8 +19,8 @@ audit, the drawing and the metrics.
 
 The plain-value forms here (``"0.2@300"``, ``"X,Y,W,H@STEP"``, a scenario's ``[[faults]]``
 tables) are parsed into `FaultEvent`; a bad one is one `InputError` line naming where it came
-from. The swarm applies events through `Swarm.fail`; `Faults` is the part of the swarm that
-holds the schedule and the log.
+from. The swarm asks `Faults` what is due each step and applies it through `Swarm.fail`; `Faults`
+holds the schedule, the rate and the log, and knows nothing of the swarm.
 """
 
 from __future__ import annotations
@@ -28,16 +28,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import LOST, STALLED
 from swarmshape.errors import InputError
-
-if TYPE_CHECKING:
-    from swarmshape.core.swarm import Swarm
 
 KINDS = ("remove", "stall")
 """Event kinds a schedule may hold (the log also says ``rate`` and ``window``)."""
@@ -99,15 +96,15 @@ class FaultEvent:
             plain["region"] = list(self.region)
         return plain
 
-    def robots(self, swarm: Swarm) -> np.ndarray:
-        """The robots this event strikes now, drawn from the swarm's generator."""
-        state = swarm.state
+    def robots(self, state: np.ndarray, cell: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The robots this event strikes now, given every robot's state and cell, drawn from
+        the run's generator."""
         alive = state != LOST
         if self.kind == "stall":
             alive &= state != STALLED
         candidates = np.flatnonzero(alive)
         if self.region is not None:
-            cells = swarm.cell[candidates]
+            cells = cell[candidates]
             if len(self.region) == 4:
                 x, y, w, h = self.region
                 inside = (cells >= (x, y)).all(axis=1) & (cells < (x + w, y + h)).all(axis=1)
@@ -121,7 +118,7 @@ class FaultEvent:
             count = min(self.amount, len(candidates))
         if count >= len(candidates):
             return candidates
-        return np.sort(swarm.rng.choice(candidates, count, replace=False))
+        return np.sort(rng.choice(candidates, count, replace=False))
 
 
 def parse_event(text: str, kind: str, option: str) -> FaultEvent:
@@ -233,27 +230,26 @@ class Faults:
         """Events remain at or after `step` (a run that formed is not over yet)."""
         return bool(self.events) and self.events[-1].step >= step
 
-    def strike(self, swarm: Swarm) -> None:
-        """Apply what is due before the swarm's next step: events at this step, then the rate."""
-        step = swarm.step_count
-        for event in self.events:
-            if event.step == step:
-                swarm.fail(event.robots(swarm), event.kind)
-        if self.rate > 0:
-            draw = swarm.rng.random(len(swarm.state)) < self.rate
-            hit = np.flatnonzero(draw & (swarm.state != LOST))
-            if len(hit):
-                swarm.fail(hit, "remove", label="rate")
+    def due(self, step: int) -> list[FaultEvent]:
+        """The events that strike before step `step` + 1 (the swarm applies them in order)."""
+        return [event for event in self.events if event.step == step]
 
-    def note(self, swarm: Swarm) -> None:
-        """After a step: faults whose shape is whole again (every target that the survivors can
-        reach is filled) record when."""
-        if not self.log or self.log[-1]["recovered_at"] is not None or not swarm.complete:
+    def rate_hits(self, state: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The robots the failure rate removes this step (drawn for every robot, present or not,
+        so the draws do not depend on who is left)."""
+        if self.rate <= 0:
+            return np.zeros(0, dtype=np.int64)
+        return np.flatnonzero((rng.random(len(state)) < self.rate) & (state != LOST))
+
+    def note(self, step: int, whole: bool) -> None:
+        """After a step: faults whose shape is `whole` again (every target that the survivors
+        can reach is filled) record when."""
+        if not self.log or self.log[-1]["recovered_at"] is not None or not whole:
             return
         for entry in self.log:
             if entry["recovered_at"] is None:
-                entry["recovered_at"] = swarm.step_count
-                entry["recovery_steps"] = swarm.step_count - entry["step"]
+                entry["recovered_at"] = step
+                entry["recovery_steps"] = step - entry["step"]
 
     @property
     def lost(self) -> int:

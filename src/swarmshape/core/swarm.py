@@ -319,7 +319,7 @@ class Swarm:
 
     def step(self) -> None:
         if self.faults.scheduled:
-            self.faults.strike(self)
+            self._strike()
         self.driver.decide()
         self._move()
         self.driver.arrived()
@@ -328,7 +328,7 @@ class Swarm:
             self.dead = self._find_dead()  # a stalled robot coasted into its last cell
         self._audit()
         self._note_completion()
-        self.faults.note(self)
+        self.faults.note(self.step_count, self.complete)
 
     def claim(self, robots: np.ndarray, directions: np.ndarray, origins: np.ndarray) -> np.ndarray:
         """Each robot asks for the cell one step in `direction` from the key `origin` (its own
@@ -465,6 +465,14 @@ class Swarm:
 
     # --- faults ---------------------------------------------------------------------------------
 
+    def _strike(self) -> None:
+        """What the fault schedule holds for this step, then the failure rate."""
+        for event in self.faults.due(self.step_count):
+            self.fail(event.robots(self.state, self.cell, self.rng), event.kind)
+        hits = self.faults.rate_hits(self.state, self.rng)
+        if len(hits):
+            self.fail(hits, "remove", label="rate")
+
     def fail(self, robots: np.ndarray, kind: str = "remove", label: str | None = None) -> None:
         """A fault strikes `robots` now: ``remove`` takes them out of the run, ``stall`` stops
         them for good where they stand (see `swarmshape.core.faults`). The targets they had
@@ -502,7 +510,7 @@ class Swarm:
                 "scale": round(min(g.shape.scale for g in self.world.groups), 6),
             }
         )
-        self.faults.note(self)
+        self.faults.note(self.step_count, self.complete)
 
     def _take_off(self, robots: np.ndarray) -> None:
         """Remove robots from the lattice: the cells they hold go to the robot queued behind
