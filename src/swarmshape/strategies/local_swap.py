@@ -53,6 +53,8 @@ class LocalSwap(Program):
         "blocked_way": Slot(np.int64, 0),
         "detour": Slot(np.int64, 0),
         "at_goal": Slot(bool, False),
+        "asked": Slot(np.int64, 0),
+        "roam": Slot(np.int64, 0),
     }
 
     def act(
@@ -68,6 +70,7 @@ class LocalSwap(Program):
         has_goal = memory.localised & (memory.goal >= 0)
         memory.at_goal = has_goal & (memory.frame == goal_cell).all(axis=1)
         occupied = _occupied(sense)
+        _note_walls(sense, memory, occupied)
         going = has_goal & ~memory.at_goal
         preferred, first = _preferred(goal_cell - memory.frame, occupied, going)
         memory.wants = _choose_partner(sense, memory, goal_cell, preferred)
@@ -77,9 +80,12 @@ class LocalSwap(Program):
         hops, toward = _hops(sense, memory)
         lost = ~memory.localised
         moves[lost] = np.where(occupied[lost, toward[lost]], 0, toward[lost])
-        wander = lost & ((moves == 0) | (hops >= FAR)) & (rng.random(len(sense)) < 0.5)
+        roaming = lost & (hops >= FAR)
+        moves[roaming] = _roam(memory, occupied, roaming, rng)
+        wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
         wander |= spare_in_shape & memory.localised & (rng.random(len(sense)) < 0.1)
         moves[wander] = _random_free(occupied[wander], rng)
+        memory.asked = np.where(sense.ready, moves, 0)
         stays = sense.ready & (moves == 0)
         messages = np.column_stack(
             [memory.localised, memory.frame, memory.goal, memory.wants, sense.number, stays, hops]
@@ -158,6 +164,14 @@ def _occupied(sense: Perception) -> np.ndarray:
         hit = near & (cells == STEPS[direction]).all(axis=1)
         occupied[sense.owner[hit], direction] = True
     return occupied
+
+
+def _note_walls(sense: Perception, memory: Memory, occupied: np.ndarray) -> None:
+    """A move asked for last step that did not happen met something a robot cannot sense (the
+    arena's edge, or a cell another robot took first): treat that way as blocked now, so a
+    detour turns back at a wall instead of pushing into it for ever."""
+    failed = np.flatnonzero(sense.ready & (memory.asked > 0) & (sense.moved == 0).all(axis=1))
+    occupied[failed, memory.asked[failed]] = True
 
 
 def _preferred(
@@ -249,6 +263,21 @@ def _trade(sense: Perception, memory: Memory) -> None:
     mutual = sense.heard & sense.kin & ~sense.seed & (memory.wants[me] >= 0)
     mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
     memory.goal[me[mutual]] = msg[mutual, GOAL]
+
+
+def _roam(
+    memory: Memory, occupied: np.ndarray, roaming: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
+    """Moves of robots that hear of no localised robot: straight on until blocked (a wall
+    shows as a move that failed), then a new random way. A straight walk crosses the arena in
+    its width; a random walk needs its area squared, which left small swarms in big arenas
+    searching for tens of thousands of steps."""
+    rows = np.flatnonzero(roaming)
+    way = memory.roam[rows]
+    turn = (way == 0) | occupied[rows, way] | (rng.random(len(rows)) < 0.02)
+    way[turn] = _random_free(occupied[rows[turn]], rng)
+    memory.roam[rows] = way
+    return way
 
 
 def _random_free(occupied: np.ndarray, rng: np.random.Generator) -> np.ndarray:
