@@ -17,6 +17,8 @@ from swarmshape.strategies import available, create
 from tests.conftest import SHAPES, make_swarm
 
 STRATEGIES = sorted(available())
+CENTRAL = [name for name in STRATEGIES if available()[name].kind == "central"]
+LOCAL = [name for name in STRATEGIES if available()[name].kind == "local"]
 
 PAPER_SHAPES = ("line.png", "square.png", "small-square.png", "horseshoe.png")
 DRAWN_SHAPES = ("star.png", "ring.png", "letter-s.png")
@@ -47,7 +49,7 @@ def test_forms_with_one_agent_per_cell(name, strategy):
     assert cells == {tuple(c) for c in swarm.world.targets.tolist()}
 
 
-@pytest.mark.parametrize("strategy", STRATEGIES)
+@pytest.mark.parametrize("strategy", CENTRAL)
 @pytest.mark.parametrize("name", PAPER_SHAPES + DRAWN_SHAPES)
 def test_spare_agents_wander_outside_the_shape_without_overlapping(name, strategy):
     grid = shipped(name)
@@ -61,6 +63,20 @@ def test_spare_agents_wander_outside_the_shape_without_overlapping(name, strateg
     assert swarm.overlap_total == 0
     assert swarm.filled.all()
     assert (swarm.cell[wanderers] != before).any(), "spare agents should walk"
+
+
+@pytest.mark.parametrize("strategy", LOCAL)
+@pytest.mark.parametrize("name", PAPER_SHAPES + DRAWN_SHAPES)
+def test_a_local_program_leaves_spare_robots_off_the_formed_shape(name, strategy):
+    grid = shipped(name)
+    swarm = formed(make_swarm(grid, agents=grid.sum() + 6, seed=5, strategy=strategy))
+    spare = swarm.state != State.SETTLED
+    assert spare.sum() == 6
+    assert not swarm.world.mask(swarm.world.targets)[tuple(swarm.cell[spare].T)].any()
+    for _ in range(300):
+        swarm.step()
+    assert swarm.overlap_total == 0
+    assert swarm.filled.all()
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
@@ -102,9 +118,15 @@ def test_same_seed_same_run_other_seed_other_run():
 def test_concurrent_groups_form_side_by_side(strategy):
     scenario = load_scenario(SHAPES / "two-squares.toml")
     swarm = formed(Swarm(build_world(list(scenario.groups)), create(strategy), seed=6))
-    for group in (0, 1):
-        on = swarm.group == group
-        assert (swarm.world.target_group[swarm.driver.target[on]] == group).all()
+    if available()[strategy].kind == "central":
+        for group in (0, 1):
+            on = swarm.group == group
+            assert (swarm.world.target_group[swarm.driver.target[on]] == group).all()
+    index = np.full(swarm.world.size, -1)
+    index[tuple(swarm.world.targets.T)] = swarm.world.target_group
+    on_a_target = index[tuple(swarm.cell.T)]
+    assert (on_a_target[on_a_target >= 0] == swarm.group[on_a_target >= 0]).all()
+    assert (on_a_target >= 0).sum() == len(swarm.world.targets)
 
 
 @settings(max_examples=25, deadline=None)

@@ -80,6 +80,18 @@ class Blueprint:
             found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
         return found
 
+    def count(self, groups: np.ndarray) -> np.ndarray:
+        """How many cells the shape of each entry's group has."""
+        return np.array([len(c) for c in self.cells], dtype=np.int64)[groups]
+
+    def cell(self, groups: np.ndarray, numbers: np.ndarray) -> np.ndarray:
+        """The frame cell numbered `numbers` (row-major) in each entry's group's shape."""
+        out = np.zeros((len(groups), 2), dtype=np.int64)
+        for group, cells in enumerate(self.cells):
+            mine = groups == group
+            out[mine] = cells[numbers[mine]]
+        return out
+
 
 @dataclass(frozen=True, eq=False)
 class Perception:

@@ -109,4 +109,4 @@ def _load_file(path: Path, spec: str) -> ModuleType:
     return module
 
 
-from swarmshape.strategies import concurrent, paper  # noqa: E402,F401  (registers built-ins)
+from swarmshape.strategies import concurrent, local_swap, paper  # noqa: E402,F401  (built-ins)
