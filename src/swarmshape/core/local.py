@@ -273,17 +273,19 @@ class LocalControl:
         self._note_filled()
 
     def _note_filled(self) -> None:
-        """Robots the program calls finished are settled, those under way are moving; a target
-        is filled while a settled robot of its group is on it."""
+        """Robots the program calls finished and that rest on a target of their group are
+        settled (a shape change can leave a finished robot off the new shape; it is not settled
+        there), those under way are moving; a target is filled while a settled robot is on it."""
         swarm = self.swarm
         index = np.full(swarm.world.size, -1)
         index[swarm.world.targets[:, 0], swarm.world.targets[:, 1]] = np.arange(len(swarm.filled))
         at = index[swarm.cell[:, 0], swarm.cell[:, 1]]
+        on_target = (at >= 0) & (swarm.world.target_group[np.maximum(at, 0)] == swarm.group)
         working = (swarm.state != LOST) & (swarm.state != STALLED)
         swarm.state[working] = np.where(swarm.ahead[working] > 0, MOVING, WAITING)
-        swarm.state[working & self.program.finished(self.memory) & (swarm.ahead == 0)] = SETTLED
-        settled = (swarm.state == SETTLED) & (at >= 0)
-        settled &= swarm.world.target_group[np.maximum(at, 0)] == swarm.group
+        finished = self.program.finished(self.memory) & (swarm.ahead == 0) & on_target
+        swarm.state[working & finished] = SETTLED
+        settled = swarm.state == SETTLED
         swarm.filled[:] = False
         swarm.filled[at[settled]] = True
 

@@ -65,14 +65,18 @@ class Blueprint:
         for cells in frame_cells:
             low = cells.min(axis=0) if len(cells) else np.zeros(2, dtype=np.int64)
             high = cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)
-            grid = np.zeros(high - low, dtype=bool)
-            grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+            grid = np.full(high - low, -1, dtype=np.int64)
+            grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = np.arange(len(cells))
             boxes.append((low, grid))
         return cls(tuple(frame_cells), _boxes=tuple(boxes))
 
-    def contains(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
-        """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
-        found = np.zeros(len(frame), dtype=bool)
+    def count(self, groups: np.ndarray) -> np.ndarray:
+        """How many cells the shape of each entry's group has."""
+        return np.array([len(c) for c in self.cells], dtype=np.int64)[groups]
+
+    def number(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        """The number of each frame cell ``(k, 2)`` in its group's shape, or -1 (not in it)."""
+        found = np.full(len(frame), -1, dtype=np.int64)
         for group, (low, grid) in enumerate(self._boxes):
             mine = np.flatnonzero(groups == group)
             local = frame[mine] - low
@@ -80,9 +84,9 @@ class Blueprint:
             found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
         return found
 
-    def count(self, groups: np.ndarray) -> np.ndarray:
-        """How many cells the shape of each entry's group has."""
-        return np.array([len(c) for c in self.cells], dtype=np.int64)[groups]
+    def contains(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
+        return self.number(groups, frame) >= 0
 
     def cell(self, groups: np.ndarray, numbers: np.ndarray) -> np.ndarray:
         """The frame cell numbered `numbers` (row-major) in each entry's group's shape."""

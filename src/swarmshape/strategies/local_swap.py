@@ -12,18 +12,21 @@ the same step, from the same two messages, so a goal is never lost or held twice
 
 from __future__ import annotations
 
+import functools
 from typing import ClassVar
 
 import numpy as np
+from scipy import ndimage
 
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import STEPS
-from swarmshape.core.perception import Perception
+from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.strategies import register
 
-LOCALISED, X, Y, GOAL, WANTS, NUMBER, STAYS, HOPS = range(8)
+LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS = range(10)
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
-it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HOPS:
+it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
+GY: whether it holds a goal, and that goal's frame cell. HOPS:
 hops to the nearest localised robot (0 if localised), a gradient the lost ones climb down."""
 
 FAR = 1000
@@ -35,19 +38,21 @@ PATIENCE = 4
 REVERSE = np.array([0, 2, 1, 4, 3])
 """The opposite of each direction index."""
 
-UNSET = -2
-"""A goal not yet drawn from the robot's number (the first step)."""
+BIG = 1 << 40
+"""Farther than any cell."""
 
 
 @register
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 8
+    message_size = 10
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
-        "goal": Slot(np.int64, UNSET),
+        "started": Slot(bool, False),
+        "has_goal": Slot(bool, False),
+        "goal": Slot(np.int64, 0, 2),
         "wants": Slot(np.int64, -1),
         "waited": Slot(np.int64, 0),
         "blocked_way": Slot(np.int64, 0),
@@ -61,22 +66,33 @@ class LocalSwap(Program):
         self, sense: Perception, memory: Memory, rng: np.random.Generator
     ) -> tuple[np.ndarray, np.ndarray]:
         localise(sense, memory)
-        count = sense.blueprint.count(sense.group)
-        unset = memory.goal == UNSET
-        memory.goal[unset] = np.where(sense.number < count, sense.number, -1)[unset]
-        memory.goal[memory.goal >= count] = -1
+        _first_goals(sense, memory)
+        _yield_taken(sense, memory)  # before trading: the messages tell the goals before it
         _trade(sense, memory)
-        goal_cell = _goal_cells(sense, memory.goal)
-        has_goal = memory.localised & (memory.goal >= 0)
-        memory.at_goal = has_goal & (memory.frame == goal_cell).all(axis=1)
+        memory.has_goal &= sense.blueprint.contains(sense.group, memory.goal)  # a reshape
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
-        going = has_goal & ~memory.at_goal
-        preferred, first = _preferred(goal_cell - memory.frame, occupied, going)
-        memory.wants = _choose_partner(sense, memory, goal_cell, preferred)
+        seeking = memory.localised & ~memory.has_goal
+        target, open_cell = _nearest_open(sense, memory, seeking)
+        here = (target == memory.frame).all(axis=1)
+        resting = memory.has_goal & (memory.goal == memory.frame).all(axis=1)
+        way = _deeper(sense, memory, occupied)
+        deepen = memory.localised & sense.ready & (way > 0) & (resting | seeking & open_cell & here)
+        memory.goal[deepen] = memory.frame[deepen] + STEPS[way[deepen]]
+        memory.has_goal[deepen] = True
+        seeking &= ~deepen
+        claim = seeking & open_cell & sense.ready & here
+        memory.goal[claim], memory.has_goal[claim] = memory.frame[claim], True
+        target[memory.has_goal] = memory.goal[memory.has_goal]
+        has_goal = memory.localised & memory.has_goal
+        memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
+        going = (has_goal | seeking & open_cell) & (memory.frame != target).any(axis=1)
+        preferred, first = _preferred(target - memory.frame, occupied, going)
+        memory.wants = _choose_partner(sense, memory, preferred, target, seeking & open_cell)
         moves = _go_round(memory, preferred, first, occupied, going & sense.ready, rng)
         moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
-        spare_in_shape = (memory.goal < 0) & sense.blueprint.contains(sense.group, memory.frame)
+        spare_in_shape = seeking & ~open_cell
+        spare_in_shape &= sense.blueprint.contains(sense.group, memory.frame)
         hops, toward = _hops(sense, memory)
         lost = ~memory.localised
         moves[lost] = np.where(occupied[lost, toward[lost]], 0, toward[lost])
@@ -88,7 +104,16 @@ class LocalSwap(Program):
         memory.asked = np.where(sense.ready, moves, 0)
         stays = sense.ready & (moves == 0)
         messages = np.column_stack(
-            [memory.localised, memory.frame, memory.goal, memory.wants, sense.number, stays, hops]
+            [
+                memory.localised,
+                memory.frame,
+                memory.has_goal,
+                memory.goal,
+                memory.wants,
+                sense.number,
+                stays,
+                hops,
+            ]
         ).astype(np.int64)
         return moves, messages
 
@@ -97,6 +122,108 @@ class LocalSwap(Program):
 
     def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
         return memory.localised, memory.frame
+
+
+def _first_goals(sense: Perception, memory: Memory) -> None:
+    """On its first step robot number k takes its shape's k-th cell (none past the shape's
+    size): the one assignment every robot can draw alone, unique by construction."""
+    new = np.flatnonzero(~memory.started)
+    take = new[sense.number[new] < sense.blueprint.count(sense.group[new])]
+    memory.goal[take] = sense.blueprint.cell(sense.group[take], sense.number[take])
+    memory.has_goal[take] = True
+    memory.started[new] = True
+
+
+def _yield_taken(sense: Perception, memory: Memory) -> None:
+    """Give up a goal that a neighbour holds too and already rests on. Goals are unique
+    except after a spare robot claimed a cell whose holder was out of range; the one that
+    got there keeps it."""
+    me, msg = sense.owner, sense.message
+    theirs = msg[:, X : Y + 1]
+    there = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
+    there &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1)
+    there &= (theirs == msg[:, GX : GY + 1]).all(axis=1) & (theirs == memory.goal[me]).all(axis=1)
+    there &= memory.has_goal[me] & (memory.frame[me] != memory.goal[me]).any(axis=1)
+    memory.has_goal[me[there]] = False
+
+
+def _nearest_open(
+    sense: Perception, memory: Memory, seeking: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """For robots without a goal, the nearest shape cell that no neighbour sits on or holds,
+    and whether there is one. A robot standing on such a cell claims it: after a reshape the
+    new cells have no holder, and only a robot that looks for them can fill them."""
+    target = memory.frame.copy()
+    found = np.zeros(len(sense), dtype=bool)
+    me, msg = sense.owner, sense.message
+    for group, cells in enumerate(sense.blueprint.cells):
+        rows = np.flatnonzero(seeking & (sense.group == group))
+        if not len(rows) or not len(cells):
+            continue
+        row_of = np.full(len(sense), -1, dtype=np.int64)
+        row_of[rows] = np.arange(len(rows))
+        far = np.abs(memory.frame[rows, None, :] - cells[None, :, :]).sum(axis=2)
+        entries = np.flatnonzero(row_of[me] >= 0)
+        sat = memory.frame[me[entries]] + np.rint(sense.offset[entries]).astype(np.int64)
+        held = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
+        held = entries[held[entries]]
+        for taken, at in ((sat, entries), (msg[held, GX : GY + 1], held)):
+            index = sense.blueprint.number(np.full(len(at), group), taken)
+            hit = index >= 0
+            far[row_of[me[at]][hit], index[hit]] = BIG
+        best = far.argmin(axis=1)
+        found[rows] = far[np.arange(len(rows)), best] < BIG
+        target[rows] = cells[best]
+    return target, found
+
+
+def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarray:
+    """Per robot, the way to an adjacent open cell deeper in the shape than its own (depth:
+    steps to the nearest cell outside the shape), or 0. Filling from the inside out is our
+    lattice addition, not the paper's: a robot resting on the shape steps into a deeper
+    hole and leaves its own cell open one step nearer the rim, so holes that faults punch
+    into a formed shape surface where spare robots reach them, and robots that claim the
+    rim of new rows never wall the inner row in. Each such step raises the summed depth of
+    occupied cells, so it ends."""
+    depth = _depth(sense.blueprint)
+    mine = _depth_at(depth, sense.group, memory.frame)
+    held = np.zeros_like(occupied)
+    me, msg = sense.owner, sense.message
+    talk = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
+    relative = msg[:, GX : GY + 1] - memory.frame[me]
+    best, way = mine.copy(), np.zeros(len(sense), dtype=np.int64)
+    for direction in range(1, len(STEPS)):
+        held[me[talk & (relative == STEPS[direction]).all(axis=1)], direction] = True
+        there = _depth_at(depth, sense.group, memory.frame + STEPS[direction])
+        better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
+        best, way = np.where(better, there, best), np.where(better, direction, way)
+    return np.where(mine > 0, way, 0)
+
+
+@functools.lru_cache(maxsize=4)
+def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Per group, the low corner of its shape's box (less one) and the taxicab distance of
+    each cell to the nearest cell outside the shape (0 outside), in a box padded by one."""
+    out = []
+    for cells in blueprint.cells:
+        low = cells.min(axis=0) - 1 if len(cells) else np.zeros(2, dtype=np.int64)
+        size = cells.max(axis=0) - low + 2 if len(cells) else np.ones(2, dtype=np.int64)
+        grid = np.zeros(size, dtype=bool)
+        grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+        out.append((low, ndimage.distance_transform_cdt(grid, metric="taxicab")))
+    return tuple(out)
+
+
+def _depth_at(
+    depth: tuple[tuple[np.ndarray, np.ndarray], ...], groups: np.ndarray, frame: np.ndarray
+) -> np.ndarray:
+    found = np.zeros(len(frame), dtype=np.int64)
+    for group, (low, grid) in enumerate(depth):
+        mine = np.flatnonzero(groups == group)
+        local = frame[mine] - low
+        fits = ((local >= 0) & (local < grid.shape)).all(axis=1)
+        found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
+    return found
 
 
 def localise(sense: Perception, memory: Memory) -> None:
@@ -149,10 +276,6 @@ def _first_per_robot(mask: np.ndarray, sense: Perception) -> np.ndarray:
     entries = np.flatnonzero(mask)[::-1]  # written last to first, so the first entry stays
     first[sense.owner[entries]] = entries
     return first
-
-
-def _goal_cells(sense: Perception, goal: np.ndarray) -> np.ndarray:
-    return sense.blueprint.cell(sense.group, np.maximum(goal, 0))
 
 
 def _occupied(sense: Perception) -> np.ndarray:
@@ -219,30 +342,35 @@ def _go_round(
 
 
 def _choose_partner(
-    sense: Perception, memory: Memory, goal_cell: np.ndarray, preferred: np.ndarray
+    sense: Perception,
+    memory: Memory,
+    preferred: np.ndarray,
+    target: np.ndarray,
+    seeks: np.ndarray,
 ) -> np.ndarray:
     """The neighbour each robot wants to trade goals with next step (its number), or -1."""
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me] & (msg[:, STAYS] == 1)
-    their_goal = msg[:, GOAL]
-    their_cell = _goal_cells_of(sense, me, their_goal)
+    my_has, their_has = memory.has_goal[me], msg[:, HAS] == 1
+    my_cell, their_cell = memory.goal[me], msg[:, GX : GY + 1]
     mine, theirs = memory.frame[me], msg[:, X : Y + 1]
 
-    def apart(where: np.ndarray, goal_at: np.ndarray, goal: np.ndarray) -> np.ndarray:
-        return np.where(goal >= 0, np.abs(where - goal_at).sum(axis=1), 0)
+    def apart(where: np.ndarray, goal_at: np.ndarray, has: np.ndarray) -> np.ndarray:
+        return np.where(has, np.abs(where - goal_at).sum(axis=1), 0)
 
-    now = apart(mine, goal_cell[me], memory.goal[me]) + apart(theirs, their_cell, their_goal)
-    traded = apart(mine, their_cell, their_goal) + apart(theirs, goal_cell[me], memory.goal[me])
+    now = apart(mine, my_cell, my_has) + apart(theirs, their_cell, their_has)
+    traded = apart(mine, their_cell, their_has) + apart(theirs, my_cell, my_has)
     gain = now - traded
     asked = msg[:, WANTS] == sense.number[me]
-    toward = goal_cell[me] - mine
-    blocked = (memory.goal[me] >= 0) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
-    resting_there = (theirs == their_cell).all(axis=1) & (their_goal >= 0)
+    toward = target[me] - mine
+    blocked = (my_has | seeks[me]) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
+    resting_there = (theirs == their_cell).all(axis=1) & their_has
     in_the_way = blocked & resting_there & (np.abs(theirs - mine).sum(axis=1) == 1)
     in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
     score = np.where(gain > 0, 2 * gain + asked, np.where((gain == 0) & (asked | in_the_way), 1, 0))
-    score = np.where(talk & (memory.goal[me] != their_goal), score, 0)
+    same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
+    score = np.where(talk & ~same, score, 0)
     best = np.full(len(sense), -1, dtype=np.int64)
     order = np.lexsort((-score, me))
     candidates = order[score[order] > 0]
@@ -252,17 +380,13 @@ def _choose_partner(
     return best
 
 
-def _goal_cells_of(sense: Perception, me: np.ndarray, goal: np.ndarray) -> np.ndarray:
-    count = sense.blueprint.count(sense.group[me])
-    return sense.blueprint.cell(sense.group[me], np.clip(goal, 0, count - 1))
-
-
 def _trade(sense: Perception, memory: Memory) -> None:
     """Robots that wanted each other last step, and hear each other now, swap goals."""
     me, msg = sense.owner, sense.message
     mutual = sense.heard & sense.kin & ~sense.seed & (memory.wants[me] >= 0)
     mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
-    memory.goal[me[mutual]] = msg[mutual, GOAL]
+    memory.has_goal[me[mutual]] = msg[mutual, HAS] == 1
+    memory.goal[me[mutual]] = msg[mutual, GX : GY + 1]
 
 
 def _roam(
