@@ -73,7 +73,7 @@ class LocalSwap(Program):
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
         seeking = memory.localised & ~memory.has_goal
-        target, open_cell = _nearest_open(sense, memory, seeking)
+        target, open_cell = _nearest_open(sense, memory, seeking, self.senses.radius)
         here = (target == memory.frame).all(axis=1)
         resting = memory.has_goal & (memory.goal == memory.frame).all(axis=1)
         way = _deeper(sense, memory, occupied)
@@ -86,7 +86,7 @@ class LocalSwap(Program):
         target[memory.has_goal] = memory.goal[memory.has_goal]
         has_goal = memory.localised & memory.has_goal
         memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
-        going = (has_goal | seeking & open_cell) & (memory.frame != target).any(axis=1)
+        going = (has_goal | seeking) & (memory.frame != target).any(axis=1)
         preferred, first = _preferred(target - memory.frame, occupied, going)
         memory.wants = _choose_partner(sense, memory, preferred, target, seeking & open_cell)
         moves = _go_round(memory, preferred, first, occupied, going & sense.ready, rng)
@@ -148,11 +148,14 @@ def _yield_taken(sense: Perception, memory: Memory) -> None:
 
 
 def _nearest_open(
-    sense: Perception, memory: Memory, seeking: np.ndarray
+    sense: Perception, memory: Memory, seeking: np.ndarray, radius: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """For robots without a goal, the nearest shape cell that no neighbour sits on or holds,
-    and whether there is one. A robot standing on such a cell claims it: after a reshape the
-    new cells have no holder, and only a robot that looks for them can fill them."""
+    """For robots without a goal, the nearest shape cell in sensing range that no neighbour
+    sits on or holds, and whether there is one. A robot standing on such a cell claims it:
+    after a reshape or a fault the open cells have no holder, and only a robot that looks for
+    them can fill them. With none in range, a robot far from the shape heads for its nearest
+    cell, and one beside it walks round it (always the same way) until it sees one open:
+    heading for cells it cannot see made it swing between two just out of range."""
     target = memory.frame.copy()
     found = np.zeros(len(sense), dtype=bool)
     me, msg = sense.owner, sense.message
@@ -171,9 +174,17 @@ def _nearest_open(
             index = sense.blueprint.number(np.full(len(at), group), taken)
             hit = index >= 0
             far[row_of[me[at]][hit], index[hit]] = BIG
-        best = far.argmin(axis=1)
-        found[rows] = far[np.arange(len(rows)), best] < BIG
-        target[rows] = cells[best]
+        seen = np.hypot(*(memory.frame[rows, None, :] - cells[None, :, :]).transpose(2, 0, 1))
+        seen = seen <= radius
+        best = np.where(seen, far, BIG).argmin(axis=1)
+        found[rows] = (far[np.arange(len(rows)), best] < BIG) & seen[np.arange(len(rows)), best]
+        by_shape = seen.any(axis=1)
+        target[rows] = np.where(found[rows, None], cells[best], cells[far.argmin(axis=1)])
+        orbit = rows[by_shape & ~found[rows]]
+        out = memory.frame[orbit] - cells.mean(axis=0)
+        out /= np.maximum(np.hypot(*out.T), 1e-9)[:, None]
+        along = np.column_stack([-out[:, 1], out[:, 0]])
+        target[orbit] = memory.frame[orbit] + np.rint(3 * along + out).astype(np.int64)
     return target, found
 
 
