@@ -154,7 +154,8 @@ def _nearest_open(
     sits on or holds, and whether there is one. A robot standing on such a cell claims it:
     after a reshape or a fault the open cells have no holder, and only a robot that looks for
     them can fill them. With none in range, a robot far from the shape heads for its nearest
-    cell, and one beside it walks round it (always the same way) until it sees one open:
+    cell, and one beside it walks round it (always the same way, leaning in, so it hugs the
+    shape instead of drifting out of sight of it) until it sees one open:
     heading for cells it cannot see made it swing between two just out of range."""
     target = memory.frame.copy()
     found = np.zeros(len(sense), dtype=bool)
@@ -184,7 +185,7 @@ def _nearest_open(
         out = memory.frame[orbit] - cells.mean(axis=0)
         out /= np.maximum(np.hypot(*out.T), 1e-9)[:, None]
         along = np.column_stack([-out[:, 1], out[:, 0]])
-        target[orbit] = memory.frame[orbit] + np.rint(3 * along + out).astype(np.int64)
+        target[orbit] = memory.frame[orbit] + np.rint(3 * along - out).astype(np.int64)
     return target, found
 
 
