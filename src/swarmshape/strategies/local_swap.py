@@ -21,6 +21,7 @@ from scipy import ndimage
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint, Perception
+from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register
 
 LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS = range(10)
@@ -215,14 +216,21 @@ def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarr
 @functools.lru_cache(maxsize=4)
 def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
     """Per group, the low corner of its shape's box (less one) and the taxicab distance of
-    each cell to the nearest cell outside the shape (0 outside), in a box padded by one."""
+    each cell to the nearest cell outside the shape (0 outside), in a box padded by one. The
+    seeds count as inside: no robot comes in past them, and a cell they wall off from the
+    outside must be filled from deeper in. They sit on fixed cells of the seed frame (the
+    frame is theirs), so every robot knows them as it knows the bitmap. So do pockets of
+    outside that shape and seeds enclose (a cut corner beside the seeds)."""
     out = []
-    for cells in blueprint.cells:
+    for shape in blueprint.cells:
+        cells = np.concatenate([shape, SEED_CELLS]) if len(shape) else shape
         low = cells.min(axis=0) - 1 if len(cells) else np.zeros(2, dtype=np.int64)
         size = cells.max(axis=0) - low + 2 if len(cells) else np.ones(2, dtype=np.int64)
         grid = np.zeros(size, dtype=bool)
         grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
-        out.append((low, ndimage.distance_transform_cdt(grid, metric="taxicab")))
+        inside = ndimage.binary_fill_holes(grid)
+        depth = ndimage.distance_transform_cdt(inside, metric="taxicab")
+        out.append((low, np.where(grid, depth, 0)))
     return tuple(out)
 
 
