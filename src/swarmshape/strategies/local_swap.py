@@ -101,6 +101,8 @@ class LocalSwap(Program):
         moves[roaming] = _roam(memory, occupied, roaming, rng)
         wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
         wander |= spare_in_shape & memory.localised & (rng.random(len(sense)) < 0.1)
+        # walking round a concave shape's centre can run into a bay; a random step gets out
+        wander |= seeking & ~open_cell & (rng.random(len(sense)) < 0.25)
         moves[wander] = _random_free(occupied[wander], rng)
         memory.asked = np.where(sense.ready, moves, 0)
         stays = sense.ready & (moves == 0)
