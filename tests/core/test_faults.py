@@ -192,3 +192,14 @@ def test_a_run_does_not_end_before_its_last_fault():
     assert len(lost) == 3 and not np.isin(swarm.lattice.holder, lost).any()
     holders = swarm.lattice.grid[swarm.lattice.grid >= 0]
     assert len(np.unique(holders)) == world.agents - 3, "every robot present holds its cell"
+
+
+@pytest.mark.parametrize("kind", ["remove", "stall"])
+def test_a_fault_that_takes_every_robot_ends_the_run_unformed(kind):
+    """Nothing can change once no robot can move: the run stops at once, and a shape whose
+    every cell is lost to stalled robots does not count as formed."""
+    world = world_of(BLOCK, BLOCK.sum())
+    swarm = Swarm(world, create("optimal"), 1, faults=Faults((FaultEvent(3, kind, 1.0),)))
+    Runner(swarm, max_steps=5000).finish()
+    assert swarm.stranded and not swarm.complete
+    assert swarm.step_count < 20 and run_metrics(swarm)["steps"] is None
