@@ -303,9 +303,12 @@ class Swarm:
 
     @property
     def stranded(self) -> bool:
-        """Faults left no robot that can move, and none is still under way: nothing can change."""
-        working = (self.state != LOST) & (self.state != STALLED)
-        return not working.any() and not (self.ahead > 0).any()
+        """A shape is not whole and nothing can change any more: every group's shape is whole,
+        or faults left the group no robot that can move or is still under way."""
+        able = ((self.state != LOST) & (self.state != STALLED)) | (self.ahead > 0)
+        groups = range(len(self.world.groups))
+        done = [self._whole(g) or not able[self.group == g].any() for g in groups]
+        return all(done) and not all(self._whole(g) for g in groups)
 
     @property
     def present(self) -> np.ndarray:
