@@ -12,8 +12,8 @@ clock also counts other people's work):
 - the same, with the robots packed in a square block (about 25 neighbours each, as in a formed
   shape, against about 5 at the start of a formation): observations are then mostly full;
 - the PettingZoo interface (a dict per robot per step), for comparison;
-- and, to show how busy the machine is, `scripts/bench.py`'s headless steps/s at the same size
-  (the central ``optimal`` strategy), which the README gives for a quiet machine.
+- and, to show how busy the machine is, `scripts/bench.py`'s stepping figure (the central
+  ``optimal`` strategy's first steps) on the same disc, as in the README's table.
 Not a test: timings depend on the machine.
 """
 
@@ -31,7 +31,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import numpy as np
 
-from bench import disc, steps_per_second
+from bench import disc, stepping
 from swarmshape.env import SwarmVectorEnv, parallel_env, vector_env
 from swarmshape.io.bitmap import ShapeWarning
 
@@ -118,12 +118,12 @@ def main() -> None:
         ("batched, robots packed", timed(batched_packed), None),
         ("PettingZoo dicts (parallel_env)", timed(per_agent), None),
     ]
-    central = max(steps_per_second(args.robots, 400)["steps_per_s"] for _ in range(3))
+    central = max(stepping(disc(args.robots), 50)["steps_per_s"] for _ in range(3))
     for name, (wall, cpu), goal in rows:
         met = goal is not None and wall >= goal
         verdict = "" if goal is None else f"   target >= {goal}: {'met' if met else 'MISSED'}"
         print(f"  {name:34s} wall {wall:7.0f}   cpu {cpu:7.0f}{verdict}")
-    print(f"  for scale: bench.py's headless steps/s  wall {central:7.0f}   (README, quiet: 2,575)")
+    print(f"  for scale: bench.py's stepping, steps/s wall {central:7.0f}   (the README's table)")
     print(f"load average now: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
 
 

@@ -305,9 +305,10 @@ class Runner:
 
     @property
     def finished(self) -> bool:
-        """Formed (or a local program gone quiet) with no fault still to come, or out of steps."""
+        """Formed (or a local program gone quiet, or no robot left that can move) with no fault
+        still to come, or out of steps."""
         swarm = self.swarm
-        settled = swarm.complete or swarm.driver.quiet
+        settled = swarm.complete or swarm.driver.quiet or swarm.stranded
         return (settled and not swarm.faults.ahead(swarm.step_count)) or self.out_of_steps
 
     def step(self) -> None:

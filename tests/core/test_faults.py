@@ -20,9 +20,11 @@ from swarmshape.core.faults import (
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.states import LOST, SETTLED, STALLED
 from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import build_world
+from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import Runner, configure, resume, save
 from swarmshape.strategies import available, create
-from tests.conftest import grid_from, world_of
+from tests.conftest import SHAPES, grid_from, world_of
 
 STRATEGIES = sorted(available())
 BLOCK = grid_from("""
@@ -192,3 +194,24 @@ def test_a_run_does_not_end_before_its_last_fault():
     assert len(lost) == 3 and not np.isin(swarm.lattice.holder, lost).any()
     holders = swarm.lattice.grid[swarm.lattice.grid >= 0]
     assert len(np.unique(holders)) == world.agents - 3, "every robot present holds its cell"
+
+
+@pytest.mark.parametrize("kind", ["remove", "stall"])
+def test_a_fault_that_takes_every_robot_ends_the_run_unformed(kind):
+    """Nothing can change once no robot can move: the run stops at once, and a shape whose
+    every cell is lost to stalled robots does not count as formed."""
+    world = world_of(BLOCK, BLOCK.sum())
+    swarm = Swarm(world, create("optimal"), 1, faults=Faults((FaultEvent(3, kind, 1.0),)))
+    Runner(swarm, max_steps=5000).finish()
+    assert swarm.stranded and not swarm.complete
+    assert swarm.step_count < 20 and run_metrics(swarm)["steps"] is None
+
+
+def test_a_group_left_with_no_robot_that_can_move_ends_the_run_once_the_other_has_formed():
+    world = build_world(list(load_scenario(SHAPES / "two-squares.toml").groups))
+    swarm = Swarm(world, create("optimal"), 1)
+    swarm.fail(np.flatnonzero(swarm.group == 0), "stall")
+    assert not swarm.stranded, "the other group can still form"
+    Runner(swarm, max_steps=5000).finish()
+    assert swarm.stranded and not swarm.complete and swarm.step_count < 5000
+    assert swarm.completed_at[0] is None and swarm.completed_at[1] is not None

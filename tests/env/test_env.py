@@ -21,9 +21,13 @@ import swarmshape.env as learn
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
+from swarmshape.core.shape import Shape
 from swarmshape.core.states import LOST, STALLED
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.errors import InputError
-from swarmshape.runs import start_swarm
+from swarmshape.runs import Runner, start_swarm
+from swarmshape.strategies import create
 
 SQUARE = np.ones((3, 3), dtype=bool)
 
@@ -343,3 +347,15 @@ def test_robots_a_fault_takes_terminate_and_leave_and_the_api_tests_still_pass()
     for _ in range(6):
         _, _, _, _, infos = vec.step(np.zeros(vec.num_envs, np.int64))
     assert infos["acting"].sum() == 9 - 3 - 2
+
+
+def test_the_reward_follows_a_shape_a_fault_re_formed_smaller():
+    world = build_world([GroupSpec("g", Shape(SQUARE), (1, 2, 3), 9)])
+    swarm = Swarm(world, create("optimal"), 1)
+    reward = learn.CoverageShare()
+    reward.reset(swarm)
+    Runner(swarm, max_steps=500).finish()
+    assert reward(swarm).sum() == pytest.approx(1.0)  # every cell filled
+    swarm.fail(np.arange(5))  # too few left: the shape is re-formed with fewer cells
+    assert len(swarm.world.targets) < 9
+    assert reward(swarm).shape == (9,)

@@ -287,7 +287,6 @@ class Swarm:
         world = self.world
         self.lattice.grid[world.seeds[:, 0], world.seeds[:, 1]] = SEED
         self.lattice.mark_targets(world.targets, world.target_group)
-        self._targets_per_group = np.bincount(world.target_group, minlength=len(world.groups))
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
         self._target_at = np.full(world.size, -1, dtype=np.int64)
@@ -299,8 +298,17 @@ class Swarm:
 
     @property
     def complete(self) -> bool:
-        """Every target is filled, or lost to stalled robots (see `dead`)."""
-        return bool((self.filled | self.dead).all())
+        """Every group's shape is whole (see `_whole`)."""
+        return all(self._whole(g) for g in range(len(self.world.groups)))
+
+    @property
+    def stranded(self) -> bool:
+        """A shape is not whole and nothing can change any more: every group's shape is whole,
+        or faults left the group no robot that can move or is still under way."""
+        able = ((self.state != LOST) & (self.state != STALLED)) | (self.ahead > 0)
+        groups = range(len(self.world.groups))
+        done = [self._whole(g) or not able[self.group == g].any() for g in groups]
+        return all(done) and not all(self._whole(g) for g in groups)
 
     @property
     def present(self) -> np.ndarray:
@@ -435,10 +443,8 @@ class Swarm:
         """Note the step at which each group's targets were all filled, and tell the driver."""
         if None not in self.completed_at:
             return
-        done = self.filled | self.dead
-        filled = np.bincount(self.world.target_group[done], minlength=len(self.world.groups))
-        for g in np.flatnonzero(filled == self._targets_per_group).tolist():
-            if self.completed_at[g] is None:
+        for g, at in enumerate(self.completed_at):
+            if at is None and self._whole(g):
                 self.completed_at[g] = self.step_count
                 self.driver.completed(g)
 
@@ -543,8 +549,11 @@ class Swarm:
         self.reshape(group, self.world.groups[group].shape.fitted(mobile))
 
     def _whole(self, group: int) -> bool:
+        """Every target of `group` is filled or lost to stalled robots (see `dead`), and not
+        every one is lost: a shape left with no cell to fill is not formed."""
         mine = self.world.target_group == group
-        return bool((self.filled | self.dead)[mine].all())
+        filled, dead = self.filled[mine], self.dead[mine]
+        return bool((filled | dead).all()) and (bool(filled.any()) or not dead.any())
 
     def _find_dead(self) -> np.ndarray:
         """Targets held by a stalled robot, or cut off by stalled robots (with the seeds and the

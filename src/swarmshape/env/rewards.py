@@ -27,14 +27,17 @@ class CoverageShare:
     the step it sets off from one, else 0."""
 
     def reset(self, swarm: Swarm) -> None:
-        world = swarm.world
-        self.index = np.full(world.size, -1, dtype=np.int64)
-        self.index[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
-        self.share = 1.0 / max(1, len(world.targets))
+        self.world = None
         self.before = self.resting(swarm)
 
     def resting(self, swarm: Swarm) -> np.ndarray:
         """Robots at rest on a target cell of their group ``(n,)``: each fills that cell."""
+        world = swarm.world
+        if world is not self.world:  # a new episode, or a fault re-formed the shape smaller
+            self.world = world
+            self.index = np.full(world.size, -1, dtype=np.int64)
+            self.index[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
+            self.share = 1.0 / max(1, len(world.targets))
         at = self.index[swarm.cell[:, 0], swarm.cell[:, 1]]
         mine = swarm.world.target_group[np.maximum(at, 0)] == swarm.group
         return (swarm.ahead == 0) & (at >= 0) & mine
