@@ -24,17 +24,36 @@ from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register
 
-LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS = range(10)
+LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS = range(13)
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
-GY: whether it holds a goal, and that goal's frame cell. HOPS:
-hops to the nearest localised robot (0 if localised), a gradient the lost ones climb down."""
+GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
+robot (0 if localised), a gradient the lost ones climb down. OX, OY, OPEN_HOPS: a shape cell
+that nobody sits on or holds, and hops to the robot that sees it (see `_relay_open`)."""
 
 FAR = 1000
-"""HOPS of a robot that hears of no localised robot at all."""
+"""HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
+of no open cell."""
+
+OPEN_REACH = 24
+"""Hops an open cell is relayed. A filled cell's news dies out by counting up to this (each
+robot takes its neighbours' fewest hops plus one), so it bounds how long a stale one lasts."""
 
 PATIENCE = 4
 """Steps a robot waits behind something before it goes round it (see `_go_round`)."""
+
+PUSH_HOPS = 1
+"""A robot without a goal trades its way into the shape through a robot resting in its way,
+toward an open cell it has news of, only if that robot is this many hops from an open cell
+or fewer (and nearer than itself). So it never trades toward news that may be stale: a filled
+cell's news is gone from the robots near it within a step or two, and a formed shape stays as
+it is. Without this a robot in a horseshoe's bay never reached an open cell just beyond the
+bay's floor."""
+
+TABU = 10
+"""Steps two robots that traded do not trade with each other again: a robot pushed out of
+its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
+straight back from the one that pushed it, by the distance rule."""
 
 REVERSE = np.array([0, 2, 1, 4, 3])
 """The opposite of each direction index."""
@@ -47,7 +66,7 @@ BIG = 1 << 40
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 10
+    message_size = 13
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -61,6 +80,9 @@ class LocalSwap(Program):
         "at_goal": Slot(bool, False),
         "asked": Slot(np.int64, 0),
         "roam": Slot(np.int64, 0),
+        "came": Slot(np.int64, 0),
+        "partner": Slot(np.int64, -1),
+        "since_trade": Slot(np.int64, 0),
     }
 
     def act(
@@ -74,7 +96,11 @@ class LocalSwap(Program):
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
         seeking = memory.localised & ~memory.has_goal
-        target, open_cell = _nearest_open(sense, memory, seeking, self.senses.radius)
+        sight, open_cell, by_shape = _open_in_sight(sense, memory, self.senses.radius)
+        news, news_hops = _relay_open(sense, memory, self.senses.radius, sight, open_cell)
+        target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
+        blind = np.flatnonzero(seeking & (news_hops >= FAR) & ~by_shape)
+        target[blind] = _nearest_cell(sense, memory, blind)
         here = (target == memory.frame).all(axis=1)
         resting = memory.has_goal & (memory.goal == memory.frame).all(axis=1)
         way = _deeper(sense, memory, occupied)
@@ -88,21 +114,22 @@ class LocalSwap(Program):
         has_goal = memory.localised & memory.has_goal
         memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
         going = (has_goal | seeking) & (memory.frame != target).any(axis=1)
-        preferred, first = _preferred(target - memory.frame, occupied, going)
-        memory.wants = _choose_partner(sense, memory, preferred, target, seeking & open_cell)
-        moves = _go_round(memory, preferred, first, occupied, going & sense.ready, rng)
+        arrived = sense.moved.any(axis=1)
+        memory.came[arrived] = _direction(-sense.moved[arrived])
+        behind = occupied.copy()
+        behind[np.arange(len(sense)), memory.came] = True
+        preferred, first = _plan(sense, target - memory.frame, behind, going, self.senses.radius)
+        memory.wants = _choose_partner(sense, memory, preferred, target, seeking, news_hops)
+        moves = _go_round(
+            memory, target - memory.frame, preferred, first, occupied, going & sense.ready, rng
+        )
         moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
-        spare_in_shape = seeking & ~open_cell
-        spare_in_shape &= sense.blueprint.contains(sense.group, memory.frame)
         hops, toward = _hops(sense, memory)
         lost = ~memory.localised
         moves[lost] = np.where(occupied[lost, toward[lost]], 0, toward[lost])
         roaming = lost & (hops >= FAR)
         moves[roaming] = _roam(memory, occupied, roaming, rng)
         wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
-        wander |= spare_in_shape & memory.localised & (rng.random(len(sense)) < 0.1)
-        # walking round a concave shape's centre can run into a bay; a random step gets out
-        wander |= seeking & ~open_cell & (rng.random(len(sense)) < 0.25)
         moves[wander] = _random_free(occupied[wander], rng)
         memory.asked = np.where(sense.ready, moves, 0)
         stays = sense.ready & (moves == 0)
@@ -116,6 +143,8 @@ class LocalSwap(Program):
                 sense.number,
                 stays,
                 hops,
+                news,
+                np.minimum(news_hops, FAR),
             ]
         ).astype(np.int64)
         return moves, messages
@@ -150,46 +179,94 @@ def _yield_taken(sense: Perception, memory: Memory) -> None:
     memory.has_goal[me[there]] = False
 
 
-def _nearest_open(
-    sense: Perception, memory: Memory, seeking: np.ndarray, radius: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """For robots without a goal, the nearest shape cell in sensing range that no neighbour
-    sits on or holds, and whether there is one. A robot standing on such a cell claims it:
-    after a reshape or a fault the open cells have no holder, and only a robot that looks for
-    them can fill them. With none in range, a robot far from the shape heads for its nearest
-    cell, and one beside it walks round it (always the same way, leaning in, so it hugs the
-    shape instead of drifting out of sight of it) until it sees one open:
-    heading for cells it cannot see made it swing between two just out of range."""
-    target = memory.frame.copy()
-    found = np.zeros(len(sense), dtype=bool)
+def _open_in_sight(
+    sense: Perception, memory: Memory, radius: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per robot, the nearest shape cell within sensing range that no neighbour sits on or
+    holds, and whether there is one; and whether it sees any shape cell at all. After a
+    reshape or a fault the open cells have no holder, and only robots that look for them can
+    fill them. Its own cell counts (a robot standing on an open cell claims it), its own goal
+    does not."""
+    disc = _disc(radius)
+    n, reach = len(sense), int(radius)
+    cells = memory.frame[:, None, :] + disc[None, :, :]
+    groups = np.repeat(sense.group, len(disc))
+    inside = sense.blueprint.contains(groups, cells.reshape(-1, 2)).reshape(n, len(disc))
+    taken = np.zeros_like(inside)
+    index = _disc_index(radius)
     me, msg = sense.owner, sense.message
+    holds = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
+    sat = np.rint(sense.offset).astype(np.int64)
+    for rows, relative in (
+        (me, sat),
+        (me[holds], msg[holds, GX : GY + 1] - memory.frame[me[holds]]),
+        (np.flatnonzero(memory.has_goal), (memory.goal - memory.frame)[memory.has_goal]),
+    ):
+        near = (np.abs(relative) <= reach).all(axis=1)
+        slot = index[relative[near, 0] + reach, relative[near, 1] + reach]
+        taken[rows[near][slot >= 0], slot[slot >= 0]] = True
+    free = inside & ~taken & memory.localised[:, None]
+    nearest = free.argmax(axis=1)
+    return cells[np.arange(n), nearest], free.any(axis=1), inside.any(axis=1)
+
+
+@functools.lru_cache(maxsize=4)
+def _disc(radius: float) -> np.ndarray:
+    """The cell offsets within `radius`, nearest first (by steps, then straight-line)."""
+    reach = int(radius)
+    span = np.arange(-reach, reach + 1)
+    grid = np.stack(np.meshgrid(span, span, indexing="ij"), axis=-1).reshape(-1, 2)
+    grid = grid[np.hypot(*grid.T) <= radius]
+    return grid[np.lexsort((np.hypot(*grid.T), np.abs(grid).sum(axis=1)))]
+
+
+@functools.lru_cache(maxsize=4)
+def _disc_index(radius: float) -> np.ndarray:
+    """Each offset's place in `_disc` (offsets from ``-reach`` stored from 0), or -1."""
+    reach = int(radius)
+    index = np.full((2 * reach + 1, 2 * reach + 1), -1, dtype=np.int64)
+    disc = _disc(radius)
+    index[disc[:, 0] + reach, disc[:, 1] + reach] = np.arange(len(disc))
+    return index
+
+
+def _relay_open(
+    sense: Perception,
+    memory: Memory,
+    radius: float,
+    sight: np.ndarray,
+    seen: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """An open cell each robot knows of, and hops to the robot that sees it (FAR: none): its
+    own sight, or the news with fewest hops that its neighbours relay. A robot trusts its own
+    eyes over news of a cell in its range. Robots without a goal head for it, so an open cell
+    anywhere, even deep inside the shape, draws them in; walking round the shape until one
+    came in sight took hundreds of steps on an 8 by 8 square."""
+    me, msg = sense.owner, sense.message
+    news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
+    news &= memory.localised[me]
+    news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
+    order = np.lexsort((msg[:, OPEN_HOPS], me))
+    order = order[news[order]]
+    owners = me[order]
+    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
+    cell, hops = sight.copy(), np.where(seen, 0, FAR)
+    told = me[firsts][~seen[me[firsts]]]
+    firsts = firsts[~seen[me[firsts]]]
+    cell[told] = msg[firsts, OX : OY + 1]
+    hops[told] = msg[firsts, OPEN_HOPS] + 1
+    return cell, hops
+
+
+def _nearest_cell(sense: Perception, memory: Memory, rows: np.ndarray) -> np.ndarray:
+    """For robots out of sight of the shape, its nearest cell."""
+    target = memory.frame[rows].copy()
     for group, cells in enumerate(sense.blueprint.cells):
-        rows = np.flatnonzero(seeking & (sense.group == group))
-        if not len(rows) or not len(cells):
-            continue
-        row_of = np.full(len(sense), -1, dtype=np.int64)
-        row_of[rows] = np.arange(len(rows))
-        far = np.abs(memory.frame[rows, None, :] - cells[None, :, :]).sum(axis=2)
-        entries = np.flatnonzero(row_of[me] >= 0)
-        sat = memory.frame[me[entries]] + np.rint(sense.offset[entries]).astype(np.int64)
-        held = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
-        held = entries[held[entries]]
-        for taken, at in ((sat, entries), (msg[held, GX : GY + 1], held)):
-            index = sense.blueprint.number(np.full(len(at), group), taken)
-            hit = index >= 0
-            far[row_of[me[at]][hit], index[hit]] = BIG
-        seen = np.hypot(*(memory.frame[rows, None, :] - cells[None, :, :]).transpose(2, 0, 1))
-        seen = seen <= radius
-        best = np.where(seen, far, BIG).argmin(axis=1)
-        found[rows] = (far[np.arange(len(rows)), best] < BIG) & seen[np.arange(len(rows)), best]
-        by_shape = seen.any(axis=1)
-        target[rows] = np.where(found[rows, None], cells[best], cells[far.argmin(axis=1)])
-        orbit = rows[by_shape & ~found[rows]]
-        out = memory.frame[orbit] - cells.mean(axis=0)
-        out /= np.maximum(np.hypot(*out.T), 1e-9)[:, None]
-        along = np.column_stack([-out[:, 1], out[:, 0]])
-        target[orbit] = memory.frame[orbit] + np.rint(3 * along - out).astype(np.int64)
-    return target, found
+        mine = sense.group[rows] == group
+        if mine.any() and len(cells):
+            far = np.abs(memory.frame[rows[mine], None, :] - cells[None, :, :]).sum(axis=2)
+            target[mine] = cells[far.argmin(axis=1)]
+    return target
 
 
 def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarray:
@@ -319,22 +396,78 @@ def _note_walls(sense: Perception, memory: Memory, occupied: np.ndarray) -> None
     occupied[failed, memory.asked[failed]] = True
 
 
-def _preferred(
-    delta: np.ndarray, occupied: np.ndarray, going: np.ndarray
+def _plan(
+    sense: Perception, delta: np.ndarray, occupied: np.ndarray, going: np.ndarray, radius: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A free direction toward the goal, the longer way first, or 0 (none, or not going); and
-    the first choice, free or not."""
+    """A robot's first step on the shortest free path, within the square it senses, to the
+    free cell there nearest its goal (0: none nearer than where it is, or not going); and the
+    straight way to the goal, the longer axis first. A robot that only stepped straight at its
+    goal took the long way round the shape half the time (it picked a side by coin when
+    blocked), and the last open cell of an 8 by 8 square waited hundreds of steps for it.
+    It plans over the cells it can sense only, and never straight back the way it came:
+    counting cells out of range as free sent robots toward them and back once they came in
+    sight, and two robots that each stepped aside for the other did so for ever."""
     x = np.where(delta[:, 0] > 0, 1, np.where(delta[:, 0] < 0, 2, 0))
     y = np.where(delta[:, 1] > 0, 3, np.where(delta[:, 1] < 0, 4, 0))
-    longer_x = np.abs(delta[:, 0]) >= np.abs(delta[:, 1])
-    first, second = np.where(longer_x, x, y), np.where(longer_x, y, x)
-    rows = np.arange(len(delta))
-    chosen = np.where(~occupied[rows, first], first, np.where(~occupied[rows, second], second, 0))
-    return np.where(going, chosen, 0), first
+    first = np.where(np.abs(delta[:, 0]) >= np.abs(delta[:, 1]), x, y)
+    rows = np.flatnonzero(going)
+    reach = int(radius)
+    side = 2 * reach + 1
+    blocked = np.ones((len(sense), side, side), dtype=bool)
+    disc = _disc(radius)
+    blocked[:, disc[:, 0] + reach, disc[:, 1] + reach] = False
+    sat = np.rint(sense.offset).astype(np.int64)
+    near = (np.abs(sat) <= reach).all(axis=1)
+    blocked[sense.owner[near], sat[near, 0] + reach, sat[near, 1] + reach] = True
+    for direction in range(1, len(STEPS)):
+        (dx, dy) = STEPS[direction] + reach
+        blocked[occupied[:, direction], dx, dy] = True
+    blocked = blocked[rows]
+    steps = np.full(blocked.shape, -1, dtype=np.int64)
+    way = np.zeros(blocked.shape, dtype=np.int64)
+    steps[:, reach, reach] = 0
+    for distance in range(1, side * side):
+        grown = False
+        for direction in range(1, len(STEPS)):
+            dx, dy = STEPS[direction]
+            source = _shifted(steps == distance - 1, dx, dy)
+            new = source & ~blocked & (steps < 0)
+            if new.any():
+                grown = True
+                steps[new] = distance
+                way[new] = direction if distance == 1 else _shifted(way, dx, dy)[new]
+        if not grown:
+            break
+    span = np.arange(-reach, reach + 1)
+    left = np.abs(delta[rows, 0, None, None] - span[None, :, None])
+    left = left + np.abs(delta[rows, 1, None, None] - span[None, None, :])
+    score = np.where(steps >= 0, left * (side * side) + steps, BIG).reshape(len(rows), side * side)
+    best = score.argmin(axis=1)
+    chosen = np.zeros(len(sense), dtype=np.int64)
+    better = score[np.arange(len(rows)), best] // (side * side) < np.abs(delta[rows]).sum(axis=1)
+    chosen[rows] = np.where(better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0)
+    return chosen, np.where(going, first, 0)
+
+
+def _direction(steps: np.ndarray) -> np.ndarray:
+    """The direction index of each unit step ``(k, 2)``."""
+    return (steps[:, None, :] == STEPS[None, 1:, :]).all(axis=2).argmax(axis=1) + 1
+
+
+def _shifted(grid: np.ndarray, dx: int, dy: int) -> np.ndarray:
+    """`grid` ``(k, w, w)`` moved by one cell ``(dx, dy)``, filled with zeros where it came
+    from outside."""
+    out = np.zeros_like(grid)
+    w = grid.shape[1]
+    xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
+    ys, yd = (slice(0, w - dy), slice(dy, w)) if dy >= 0 else (slice(-dy, w), slice(0, w + dy))
+    out[:, xd, yd] = grid[:, xs, ys]
+    return out
 
 
 def _go_round(
     memory: Memory,
+    delta: np.ndarray,
     preferred: np.ndarray,
     first: np.ndarray,
     occupied: np.ndarray,
@@ -342,13 +475,19 @@ def _go_round(
     rng: np.random.Generator,
 ) -> np.ndarray:
     """Moves of robots on their way, going round what blocks them like a bug algorithm: after
-    `PATIENCE` steps blocked, a robot steps sideways (a random side) and keeps that way until
-    the way it was blocked in is free, turning back when the side is blocked too."""
+    `PATIENCE` steps blocked, a robot steps sideways (toward the goal if it lies off to one
+    side, else a random side) and keeps that way until the way it was blocked in is free,
+    turning back when the side is blocked too. A detour ends too once that way no longer
+    leads to the goal (a trade changed it): one robot kept going round for a way that led
+    nowhere for hundreds of steps."""
     rows = np.arange(len(first))
+    memory.detour[(STEPS[memory.blocked_way] * delta).sum(axis=1) <= 0] = 0
     blocked = ready & (preferred == 0) & (first > 0)
     memory.waited = np.where(blocked & (memory.detour == 0), memory.waited + 1, 0)
     start = blocked & (memory.waited > PATIENCE)
-    sideways = np.where(first <= 2, 3, 1) + (rng.random(len(first)) < 0.5)
+    off = np.where(first <= 2, delta[:, 1], delta[:, 0])  # < 0: the side numbered higher
+    coin = rng.random(len(first)) < 0.5
+    sideways = np.where(first <= 2, 3, 1) + np.where(off == 0, coin, off < 0)
     memory.blocked_way = np.where(start, first, memory.blocked_way)
     memory.detour = np.where(start, sideways, memory.detour)
     memory.waited[start] = 0
@@ -368,9 +507,13 @@ def _choose_partner(
     memory: Memory,
     preferred: np.ndarray,
     target: np.ndarray,
-    seeks: np.ndarray,
+    seeking: np.ndarray,
+    news_hops: np.ndarray,
 ) -> np.ndarray:
-    """The neighbour each robot wants to trade goals with next step (its number), or -1."""
+    """The neighbour each robot wants to trade goals with next step (its number), or -1: one
+    that shortens their summed distance, one resting in its way, or (a robot without a goal,
+    see `PUSH_HOPS`) one resting in its way nearer an open cell, which gives up its cell and
+    goes on toward the open one."""
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me] & (msg[:, STAYS] == 1)
@@ -386,13 +529,19 @@ def _choose_partner(
     gain = now - traded
     asked = msg[:, WANTS] == sense.number[me]
     toward = target[me] - mine
-    blocked = (my_has | seeks[me]) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
+    blocked = (my_has | seeking[me]) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
     resting_there = (theirs == their_cell).all(axis=1) & their_has
     in_the_way = blocked & resting_there & (np.abs(theirs - mine).sum(axis=1) == 1)
     in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
-    score = np.where(gain > 0, 2 * gain + asked, np.where((gain == 0) & (asked | in_the_way), 1, 0))
+    their_news = msg[:, OPEN_HOPS]
+    push = in_the_way & ~my_has & (their_news < np.minimum(news_hops[me], PUSH_HOPS + 1))
+    pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
+    pushed &= news_hops[me] < np.minimum(their_news, PUSH_HOPS + 1)
+    fair = (gain == 0) & (asked | in_the_way)
+    score = np.where(gain > 0, 2 * gain + asked, np.where(fair | push | pushed, 1, 0))
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
-    score = np.where(talk & ~same, score, 0)
+    again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
+    score = np.where(talk & ~same & ~again, score, 0)
     best = np.full(len(sense), -1, dtype=np.int64)
     order = np.lexsort((-score, me))
     candidates = order[score[order] > 0]
@@ -409,6 +558,10 @@ def _trade(sense: Perception, memory: Memory) -> None:
     mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
     memory.has_goal[me[mutual]] = msg[mutual, HAS] == 1
     memory.goal[me[mutual]] = msg[mutual, GX : GY + 1]
+    memory.detour[me[mutual]] = 0  # a detour for the old goal
+    memory.since_trade += 1
+    memory.partner[me[mutual]] = msg[mutual, NUMBER]
+    memory.since_trade[me[mutual]] = 0
 
 
 def _roam(
