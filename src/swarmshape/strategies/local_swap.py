@@ -45,7 +45,8 @@ PATIENCE = 4
 PUSH_HOPS = 1
 """A robot without a goal trades its way into the shape through a robot resting in its way,
 toward an open cell it has news of, only if that robot is this many hops from an open cell
-or fewer (and nearer than itself). So it never trades toward news that may be stale: a filled
+or fewer, and nearer it (each push brings the robot without a goal nearer, so pushes never
+go round in a circle). So it never trades toward news that may be stale: a filled
 cell's news is gone from the robots near it within a step or two, and a formed shape stays as
 it is. Without this a robot in a horseshoe's bay never reached an open cell just beyond the
 bay's floor."""
@@ -83,6 +84,8 @@ class LocalSwap(Program):
         "came": Slot(np.int64, 0),
         "partner": Slot(np.int64, -1),
         "since_trade": Slot(np.int64, 0),
+        "gave": Slot(bool, False),
+        "given": Slot(np.int64, 0, 2),
     }
 
     def act(
@@ -119,7 +122,9 @@ class LocalSwap(Program):
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
         preferred, first = _plan(sense, target - memory.frame, behind, going, self.senses.radius)
-        memory.wants = _choose_partner(sense, memory, preferred, target, seeking, news_hops)
+        memory.wants = _choose_partner(
+            sense, memory, preferred, target, seeking, news, news_hops
+        )
         moves = _go_round(
             memory, target - memory.frame, preferred, first, occupied, going & sense.ready, rng
         )
@@ -186,7 +191,9 @@ def _open_in_sight(
     holds, and whether there is one; and whether it sees any shape cell at all. After a
     reshape or a fault the open cells have no holder, and only robots that look for them can
     fill them. Its own cell counts (a robot standing on an open cell claims it), its own goal
-    does not."""
+    does not, nor one it has just traded away (its partner's message saying so is a step
+    behind; a robot pushed out of its cell claimed it straight back)."""
+    recent = memory.gave & (memory.since_trade < TABU)
     disc = _disc(radius)
     n, reach = len(sense), int(radius)
     cells = memory.frame[:, None, :] + disc[None, :, :]
@@ -201,6 +208,7 @@ def _open_in_sight(
         (me, sat),
         (me[holds], msg[holds, GX : GY + 1] - memory.frame[me[holds]]),
         (np.flatnonzero(memory.has_goal), (memory.goal - memory.frame)[memory.has_goal]),
+        (np.flatnonzero(recent), (memory.given - memory.frame)[recent]),
     ):
         near = (np.abs(relative) <= reach).all(axis=1)
         slot = index[relative[near, 0] + reach, relative[near, 1] + reach]
@@ -508,6 +516,7 @@ def _choose_partner(
     preferred: np.ndarray,
     target: np.ndarray,
     seeking: np.ndarray,
+    news: np.ndarray,
     news_hops: np.ndarray,
 ) -> np.ndarray:
     """The neighbour each robot wants to trade goals with next step (its number), or -1: one
@@ -534,9 +543,11 @@ def _choose_partner(
     in_the_way = blocked & resting_there & (np.abs(theirs - mine).sum(axis=1) == 1)
     in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
     their_news = msg[:, OPEN_HOPS]
-    push = in_the_way & ~my_has & (their_news < np.minimum(news_hops[me], PUSH_HOPS + 1))
+    push = in_the_way & ~my_has & (their_news <= PUSH_HOPS)
     pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
-    pushed &= news_hops[me] < np.minimum(their_news, PUSH_HOPS + 1)
+    open_at = news[me]
+    nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)
+    pushed &= (news_hops[me] <= PUSH_HOPS) & nearer
     fair = (gain == 0) & (asked | in_the_way)
     score = np.where(gain > 0, 2 * gain + asked, np.where(fair | push | pushed, 1, 0))
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
@@ -556,6 +567,8 @@ def _trade(sense: Perception, memory: Memory) -> None:
     me, msg = sense.owner, sense.message
     mutual = sense.heard & sense.kin & ~sense.seed & (memory.wants[me] >= 0)
     mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
+    memory.gave[me[mutual]] = memory.has_goal[me[mutual]]
+    memory.given[me[mutual]] = memory.goal[me[mutual]]
     memory.has_goal[me[mutual]] = msg[mutual, HAS] == 1
     memory.goal[me[mutual]] = msg[mutual, GX : GY + 1]
     memory.detour[me[mutual]] = 0  # a detour for the old goal
