@@ -520,7 +520,8 @@ def _choose_partner(
     news_hops: np.ndarray,
 ) -> np.ndarray:
     """The neighbour each robot wants to trade goals with next step (its number), or -1: one
-    that shortens their summed distance, one resting in its way, or (a robot without a goal,
+    that shortens their summed distance, one at rest in its way (robots that each wait for
+    the next one's cell, in a ring, trade their way out of it), or (a robot without a goal,
     see `PUSH_HOPS`) one resting in its way nearer an open cell, which gives up its cell and
     goes on toward the open one."""
     me, msg = sense.owner, sense.message
@@ -540,10 +541,10 @@ def _choose_partner(
     toward = target[me] - mine
     blocked = (my_has | seeking[me]) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
     resting_there = (theirs == their_cell).all(axis=1) & their_has
-    in_the_way = blocked & resting_there & (np.abs(theirs - mine).sum(axis=1) == 1)
+    in_the_way = blocked & (np.abs(theirs - mine).sum(axis=1) == 1)
     in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
     their_news = msg[:, OPEN_HOPS]
-    push = in_the_way & ~my_has & (their_news <= PUSH_HOPS)
+    push = in_the_way & resting_there & ~my_has & (their_news <= PUSH_HOPS)
     pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
     open_at = news[me]
     nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)
