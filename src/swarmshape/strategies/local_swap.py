@@ -573,6 +573,7 @@ def _trade(sense: Perception, memory: Memory) -> None:
     memory.has_goal[me[mutual]] = msg[mutual, HAS] == 1
     memory.goal[me[mutual]] = msg[mutual, GX : GY + 1]
     memory.detour[me[mutual]] = 0  # a detour for the old goal
+    memory.came[me[mutual]] = 0  # the way back may lead to the new one
     memory.since_trade += 1
     memory.partner[me[mutual]] = msg[mutual, NUMBER]
     memory.since_trade[me[mutual]] = 0
