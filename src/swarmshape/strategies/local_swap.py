@@ -523,10 +523,14 @@ def _choose_partner(
     that shortens their summed distance, one at rest in its way (robots that each wait for
     the next one's cell, in a ring, trade their way out of it), or (a robot without a goal,
     see `PUSH_HOPS`) one resting in its way nearer an open cell, which gives up its cell and
-    goes on toward the open one."""
+    goes on toward the open one. A trade that shortens the summed distance is agreed with a
+    neighbour on the move too (both hold still for it): two robots that met head-on in a
+    corridor each stepped aside for the other, in step, and never once both stood still to
+    trade."""
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
-    talk &= memory.localised[me] & sense.ready[me] & (msg[:, STAYS] == 1)
+    talk &= memory.localised[me] & sense.ready[me]
+    still = msg[:, STAYS] == 1
     my_has, their_has = memory.has_goal[me], msg[:, HAS] == 1
     my_cell, their_cell = memory.goal[me], msg[:, GX : GY + 1]
     mine, theirs = memory.frame[me], msg[:, X : Y + 1]
@@ -550,7 +554,7 @@ def _choose_partner(
     nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)
     pushed &= (news_hops[me] <= PUSH_HOPS) & nearer
     fair = (gain == 0) & (asked | in_the_way)
-    score = np.where(gain > 0, 2 * gain + asked, np.where(fair | push | pushed, 1, 0))
+    score = np.where(gain > 0, 2 * gain + asked, np.where(still & (fair | push | pushed), 1, 0))
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
     again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
     score = np.where(talk & ~same & ~again, score, 0)
