@@ -51,6 +51,13 @@ cell's news is gone from the robots near it within a step or two, and a formed s
 it is. Without this a robot in a horseshoe's bay never reached an open cell just beyond the
 bay's floor."""
 
+STUCK = 20
+"""Steps without getting nearer its target after which a robot without a goal may push (see
+`PUSH_HOPS`). A push moves a robot that rests on its goal; walking round costs nobody else a
+step, and robots on cells that a reshape keeps stay where they are unless nobody can get
+past them. A robot pushed out of its cell pushes on at once: waiting, it was pushed back
+when `TABU` ran out, and the two did that for ever at a star's notch."""
+
 TABU = 10
 """Steps two robots that traded do not trade with each other again: a robot pushed out of
 its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
@@ -86,6 +93,11 @@ class LocalSwap(Program):
         "since_trade": Slot(np.int64, 0),
         "gave": Slot(bool, False),
         "given": Slot(np.int64, 0, 2),
+        "aim": Slot(np.int64, 0, 2),
+        "closest": Slot(np.int64, 0),
+        "stuck": Slot(np.int64, 0),
+        "heard": Slot(np.int64, 0, 2),
+        "heard_hops": Slot(np.int64, FAR),
     }
 
     def act(
@@ -117,6 +129,7 @@ class LocalSwap(Program):
         has_goal = memory.localised & memory.has_goal
         memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
         going = (has_goal | seeking) & (memory.frame != target).any(axis=1)
+        _note_progress(memory, target)
         arrived = sense.moved.any(axis=1)
         memory.came[arrived] = _direction(-sense.moved[arrived])
         behind = occupied.copy()
@@ -159,6 +172,16 @@ class LocalSwap(Program):
 
     def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
         return memory.localised, memory.frame
+
+
+def _note_progress(memory: Memory, target: np.ndarray) -> None:
+    """Count the steps since each robot last came nearer its target (a new target starts
+    the count afresh)."""
+    left = np.abs(target - memory.frame).sum(axis=1)
+    new = (target != memory.aim).any(axis=1) | (left < memory.closest)
+    memory.stuck = np.where(new, 0, memory.stuck + 1)
+    memory.closest = np.where(new, left, memory.closest)
+    memory.aim = target.copy()
 
 
 def _first_goals(sense: Perception, memory: Memory) -> None:
@@ -249,7 +272,10 @@ def _relay_open(
     own sight, or the news with fewest hops that its neighbours relay. A robot trusts its own
     eyes over news of a cell in its range. Robots without a goal head for it, so an open cell
     anywhere, even deep inside the shape, draws them in; walking round the shape until one
-    came in sight took hundreds of steps on an 8 by 8 square."""
+    came in sight took hundreds of steps on an 8 by 8 square. A robot that hears no news
+    goes on by the last it heard, a hop older each step: one in the bay of a 1,000-cell
+    letter S walked toward an open cell, out of earshot of the robots that told of it, back
+    to them, and so on for thousands of steps."""
     me, msg = sense.owner, sense.message
     news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
     news &= memory.localised[me]
@@ -263,6 +289,10 @@ def _relay_open(
     firsts = firsts[~seen[me[firsts]]]
     cell[told] = msg[firsts, OX : OY + 1]
     hops[told] = msg[firsts, OPEN_HOPS] + 1
+    recall = (hops >= FAR) & (memory.heard_hops + 1 < OPEN_REACH) & memory.localised
+    recall &= np.hypot(*(memory.heard - memory.frame).T) > radius
+    cell[recall], hops[recall] = memory.heard[recall], memory.heard_hops[recall] + 1
+    memory.heard, memory.heard_hops = cell.copy(), hops.copy()
     return cell, hops
 
 
@@ -549,6 +579,8 @@ def _choose_partner(
     in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
     their_news = msg[:, OPEN_HOPS]
     push = in_the_way & resting_there & ~my_has & (their_news <= PUSH_HOPS)
+    pushed_on = memory.gave & (memory.since_trade < TABU)  # a push goes on down the chain
+    push &= (memory.stuck > STUCK)[me] | pushed_on[me]
     pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
     open_at = news[me]
     nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)
