@@ -52,8 +52,9 @@ it is. Without this a robot in a horseshoe's bay never reached an open cell just
 bay's floor."""
 
 STUCK = 20
-"""Steps without getting nearer its target after which a robot without a goal may push (see
-`PUSH_HOPS`). A push moves a robot that rests on its goal; walking round costs nobody else a
+"""Steps without getting nearer its target after which a robot takes a random step now and
+then (the planner sees three cells round it, and in a shape's bays its choices can go round
+a loop of four cells for ever), and a robot without a goal may push (see `PUSH_HOPS`). A push moves a robot that rests on its goal; walking round costs nobody else a
 step, and robots on cells that a reshape keeps stay where they are unless nobody can get
 past them. A robot pushed out of its cell pushes on at once: waiting, it was pushed back
 when `TABU` ran out, and the two did that for ever at a star's notch."""
@@ -141,6 +142,8 @@ class LocalSwap(Program):
         moves = _go_round(
             memory, target - memory.frame, preferred, first, occupied, going & sense.ready, rng
         )
+        astray = going & sense.ready & (memory.stuck > STUCK) & (rng.random(len(sense)) < 0.25)
+        moves[astray] = _random_free(occupied[astray], rng)
         moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
         hops, toward = _hops(sense, memory)
         lost = ~memory.localised
@@ -175,13 +178,17 @@ class LocalSwap(Program):
 
 
 def _note_progress(memory: Memory, target: np.ndarray) -> None:
-    """Count the steps since each robot last came nearer its target (a new target starts
-    the count afresh)."""
+    """Count the steps since each robot last came nearer its target; a new target starts
+    the count afresh. A robot with nowhere to go keeps its count and its target: a seeker in
+    a letter S's bay lost sight of its open cell every few steps, for a step, and so never
+    counted as stuck."""
     left = np.abs(target - memory.frame).sum(axis=1)
-    new = (target != memory.aim).any(axis=1) | (left < memory.closest)
-    memory.stuck = np.where(new, 0, memory.stuck + 1)
-    memory.closest = np.where(new, left, memory.closest)
-    memory.aim = target.copy()
+    aiming = left > 0
+    new = aiming & (target != memory.aim).any(axis=1)
+    nearer = aiming & (left < memory.closest)
+    memory.stuck = np.where(new | nearer, 0, memory.stuck + aiming)
+    memory.closest = np.where(new | nearer, left, memory.closest)
+    memory.aim[aiming] = target[aiming]
 
 
 def _first_goals(sense: Perception, memory: Memory) -> None:
