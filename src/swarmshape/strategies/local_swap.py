@@ -54,10 +54,11 @@ bay's floor."""
 STUCK = 20
 """Steps without getting nearer its target after which a robot takes a random step now and
 then (the planner sees three cells round it, and in a shape's bays its choices can go round
-a loop of four cells for ever), and a robot without a goal may push (see `PUSH_HOPS`). A push moves a robot that rests on its goal; walking round costs nobody else a
-step, and robots on cells that a reshape keeps stay where they are unless nobody can get
-past them. A robot pushed out of its cell pushes on at once: waiting, it was pushed back
-when `TABU` ran out, and the two did that for ever at a star's notch."""
+a loop of four cells for ever), and a robot without a goal may push (see `PUSH_HOPS`). A
+push moves a robot that rests on its goal; walking round costs nobody else a step, and
+robots on cells that a reshape keeps stay where they are unless nobody can get past them. A
+robot pushed out of its cell pushes on at once: waiting, it was pushed back when `TABU` ran
+out, and the two did that for ever at a star's notch."""
 
 TABU = 10
 """Steps two robots that traded do not trade with each other again: a robot pushed out of
@@ -136,9 +137,7 @@ class LocalSwap(Program):
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
         preferred, first = _plan(sense, target - memory.frame, behind, going, self.senses.radius)
-        memory.wants = _choose_partner(
-            sense, memory, preferred, target, seeking, news, news_hops
-        )
+        memory.wants = _choose_partner(sense, memory, preferred, target, seeking, news, news_hops)
         moves = _go_round(
             memory, target - memory.frame, preferred, first, occupied, going & sense.ready, rng
         )
@@ -490,7 +489,9 @@ def _plan(
     best = score.argmin(axis=1)
     chosen = np.zeros(len(sense), dtype=np.int64)
     better = score[np.arange(len(rows)), best] // (side * side) < np.abs(delta[rows]).sum(axis=1)
-    chosen[rows] = np.where(better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0)
+    chosen[rows] = np.where(
+        better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0
+    )
     return chosen, np.where(going, first, 0)
 
 
