@@ -286,15 +286,11 @@ def _relay_open(
     news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
     news &= memory.localised[me]
     news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
-    order = np.lexsort((msg[:, OPEN_HOPS], me))
-    order = order[news[order]]
-    owners = me[order]
-    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
+    best = _best_per_robot(len(sense), me, msg[:, OPEN_HOPS], news)
+    told = (best >= 0) & ~seen
     cell, hops = sight.copy(), np.where(seen, 0, FAR)
-    told = me[firsts][~seen[me[firsts]]]
-    firsts = firsts[~seen[me[firsts]]]
-    cell[told] = msg[firsts, OX : OY + 1]
-    hops[told] = msg[firsts, OPEN_HOPS] + 1
+    cell[told] = msg[best[told], OX : OY + 1]
+    hops[told] = msg[best[told], OPEN_HOPS] + 1
     recall = (hops >= FAR) & (memory.heard_hops + 1 < OPEN_REACH) & memory.localised
     recall &= np.hypot(*(memory.heard - memory.frame).T) > radius
     cell[recall], hops[recall] = memory.heard[recall], memory.heard_hops[recall] + 1
@@ -381,7 +377,7 @@ def localise(sense: Perception, memory: Memory) -> None:
     reference = np.where(sense.seed[:, None], sense.seed_frame, sense.message[:, X : Y + 1])
     usable = whole & (robot | sense.heard & sense.kin & sense.seed)
     usable &= ~memory.localised[sense.owner] & sense.ready[sense.owner]
-    first = _first_per_robot(usable, sense)
+    first = _best_per_robot(len(sense), sense.owner, np.zeros(len(usable)), usable)
     found = first >= 0
     memory.frame[found] = (reference - cells)[first[found]]
     memory.localised |= found
@@ -395,11 +391,7 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
     )
     heard_hops = np.where(sense.heard & sense.kin, heard_hops, FAR)
     heard_hops[~sense.seed & (sense.message[:, LOCALISED] == 0) & (heard_hops == 0)] = FAR
-    order = np.lexsort((heard_hops, sense.owner))
-    best = np.full(len(sense), -1, dtype=np.int64)
-    owners = sense.owner[order]
-    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
-    best[sense.owner[firsts]] = firsts
+    best = _best_per_robot(len(sense), sense.owner, heard_hops, np.ones(len(heard_hops), bool))
     found = best >= 0
     nearest = np.full(len(sense), FAR, dtype=np.int64)
     nearest[found] = heard_hops[best[found]]
@@ -412,13 +404,16 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
     return hops, np.where(closer, way, 0)
 
 
-def _first_per_robot(mask: np.ndarray, sense: Perception) -> np.ndarray:
-    """Per robot, the index of its first entry (nearest, as sensed in reach order) in `mask`,
-    or -1."""
-    first = np.full(len(sense), -1, dtype=np.int64)
-    entries = np.flatnonzero(mask)[::-1]  # written last to first, so the first entry stays
-    first[sense.owner[entries]] = entries
-    return first
+def _best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
+    the first, in reach order), or -1."""
+    order = np.lexsort((key, owner))  # stable: equal keys stay in reach order
+    order = order[mask[order]]
+    best = np.full(n, -1, dtype=np.int64)
+    owners = owner[order]
+    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
+    best[owner[firsts]] = firsts
+    return best
 
 
 def _occupied(sense: Perception) -> np.ndarray:
@@ -598,13 +593,10 @@ def _choose_partner(
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
     again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
     score = np.where(talk & ~same & ~again, score, 0)
-    best = np.full(len(sense), -1, dtype=np.int64)
-    order = np.lexsort((-score, me))
-    candidates = order[score[order] > 0]
-    owners = me[candidates]
-    firsts = candidates[np.r_[True, owners[1:] != owners[:-1]]] if len(candidates) else candidates
-    best[me[firsts]] = msg[firsts, NUMBER]
-    return best
+    best = _best_per_robot(len(sense), me, -score, score > 0)
+    wants = np.full(len(sense), -1, dtype=np.int64)
+    wants[best >= 0] = msg[best[best >= 0], NUMBER]
+    return wants
 
 
 def _trade(sense: Perception, memory: Memory) -> None:
