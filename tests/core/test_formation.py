@@ -7,14 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from swarmshape.check import InvariantWatch
+from swarmshape.core.shape import Shape
 from swarmshape.core.states import State
 from swarmshape.core.swarm import Swarm
-from swarmshape.core.world import build_world
+from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.io.bitmap import load_grid
 from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import run
 from swarmshape.strategies import available, create
-from tests.conftest import SHAPES, make_swarm
+from tests.conftest import SHAPES, grid_from, make_swarm
 
 STRATEGIES = sorted(available())
 CENTRAL = [name for name in STRATEGIES if available()[name].kind == "central"]
@@ -77,6 +79,21 @@ def test_a_local_program_leaves_spare_robots_off_the_formed_shape(name, strategy
         swarm.step()
     assert swarm.overlap_total == 0
     assert swarm.filled.all()
+
+
+@pytest.mark.parametrize("strategy", LOCAL)
+def test_a_goal_held_twice_never_costs_the_formed_shape_a_cell(strategy):
+    """Hypothesis found this run: a spare robot claimed a cell whose holder was out of range,
+    traded the second copy of that goal into the formed shape, and a robot there left its
+    cell for it (local-swap, step 321)."""
+    grid = grid_from("####. .#### ##... ....#")
+    swarm = Swarm(build_world([GroupSpec("g", Shape(grid), (1, 2, 3), 16)]), create(strategy), 443)
+    watch = InvariantWatch()
+    for _ in range(700):
+        swarm.step()
+        watch.capture(swarm)
+    assert watch.problems == []
+    assert swarm.complete
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)

@@ -24,12 +24,16 @@ from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register
 
-LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS = range(13)
+LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY = range(
+    16
+)
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
 GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
 robot (0 if localised), a gradient the lost ones climb down. OX, OY, OPEN_HOPS: a shape cell
-that nobody sits on or holds, and hops to the robot that sees it (see `_relay_open`)."""
+that nobody sits on or holds, and hops to the robot that sees it (see `_relay_open`). TWICE,
+TX, TY: a goal it hears held twice, by a robot at rest on it and one still on its way (see
+`_held_twice`)."""
 
 FAR = 1000
 """HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
@@ -76,7 +80,7 @@ BIG = 1 << 40
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 13
+    message_size = 16
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -107,7 +111,9 @@ class LocalSwap(Program):
     ) -> tuple[np.ndarray, np.ndarray]:
         localise(sense, memory)
         _first_goals(sense, memory)
-        _yield_taken(sense, memory)  # before trading: the messages tell the goals before it
+        rested = _goals_at_rest(sense, memory)  # before trading, as the messages tell them
+        twice, twice_cell = _held_twice(sense, memory, rested)
+        _yield_taken(sense, memory)
         _trade(sense, memory)
         memory.has_goal &= sense.blueprint.contains(sense.group, memory.goal)  # a reshape
         occupied = _occupied(sense)
@@ -137,7 +143,9 @@ class LocalSwap(Program):
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
         preferred, first = _plan(sense, target - memory.frame, behind, going, self.senses.radius)
-        memory.wants = _choose_partner(sense, memory, preferred, target, seeking, news, news_hops)
+        memory.wants = _choose_partner(
+            sense, memory, preferred, target, seeking, news, news_hops, rested
+        )
         moves = _go_round(
             memory, target - memory.frame, preferred, first, occupied, going & sense.ready, rng
         )
@@ -165,6 +173,8 @@ class LocalSwap(Program):
                 hops,
                 news,
                 np.minimum(news_hops, FAR),
+                twice,
+                twice_cell,
             ]
         ).astype(np.int64)
         return moves, messages
@@ -201,16 +211,58 @@ def _first_goals(sense: Perception, memory: Memory) -> None:
 
 
 def _yield_taken(sense: Perception, memory: Memory) -> None:
-    """Give up a goal that a neighbour holds too and already rests on. Goals are unique
-    except after a spare robot claimed a cell whose holder was out of range; the one that
-    got there keeps it."""
+    """Give up a goal that a neighbour holds too and already rests on, or that a neighbour
+    says is held so (`_held_twice`). Goals are unique except after a spare robot claimed a
+    cell whose holder was out of range; the one that got there keeps it. A goal traded for
+    in the last two steps is not the one a neighbour's word is about (it spoke a step before
+    the trade)."""
     me, msg = sense.owner, sense.message
     theirs = msg[:, X : Y + 1]
     there = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     there &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1)
     there &= (theirs == msg[:, GX : GY + 1]).all(axis=1) & (theirs == memory.goal[me]).all(axis=1)
-    there &= memory.has_goal[me] & (memory.frame[me] != memory.goal[me]).any(axis=1)
-    memory.has_goal[me[there]] = False
+    told = sense.heard & sense.kin & ~sense.seed & (msg[:, TWICE] == 1)
+    told &= (msg[:, TX : TY + 1] == memory.goal[me]).all(axis=1) & (memory.since_trade[me] > 1)
+    drop = (there | told) & memory.has_goal[me] & (memory.frame[me] != memory.goal[me]).any(axis=1)
+    memory.has_goal[me[drop]] = False
+
+
+def _goals_at_rest(sense: Perception, memory: Memory) -> np.ndarray:
+    """Sorted keys (`_key`) of each robot and a goal it knows a robot rests on: a neighbour
+    that says so, or itself."""
+    me, msg = sense.owner, sense.message
+    theirs = msg[:, X : Y + 1]
+    resting = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
+    resting &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1) & (theirs == msg[:, GX : GY + 1]).all(1)
+    own = memory.localised & memory.has_goal & (memory.frame == memory.goal).all(axis=1)
+    return np.unique(
+        np.concatenate(
+            [_key(me[resting], theirs[resting]), _key(np.flatnonzero(own), memory.goal[own])]
+        )
+    )
+
+
+def _key(robot: np.ndarray, cell: np.ndarray) -> np.ndarray:
+    """One integer per robot and frame cell, for set lookups (`np.isin`)."""
+    span = np.int64(1 << 21)
+    return (robot.astype(np.int64) * span + cell[:, 0] + span // 2) * span + cell[:, 1] + span // 2
+
+
+def _held_twice(
+    sense: Perception, memory: Memory, rested: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per robot, whether it hears a neighbour on its way to a goal that another robot rests
+    on, and that goal: it says so, and the one on its way gives the goal up. Without this a
+    spare robot that claimed a cell whose holder was far away kept the goal, traded it into
+    the formed shape, and a robot there left its cell for it."""
+    me, msg = sense.owner, sense.message
+    goal = msg[:, GX : GY + 1]
+    away = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1) & (msg[:, HAS] == 1)
+    away &= (msg[:, X : Y + 1] != goal).any(axis=1) & np.isin(_key(me, goal), rested)
+    first = _best_per_robot(len(sense), me, np.zeros(len(me)), away)
+    cell = np.zeros((len(sense), 2), dtype=np.int64)
+    cell[first >= 0] = goal[first[first >= 0]]
+    return first >= 0, cell
 
 
 def _open_in_sight(
@@ -551,6 +603,7 @@ def _choose_partner(
     seeking: np.ndarray,
     news: np.ndarray,
     news_hops: np.ndarray,
+    rested: np.ndarray,
 ) -> np.ndarray:
     """The neighbour each robot wants to trade goals with next step (its number), or -1: one
     that shortens their summed distance, one at rest in its way (robots that each wait for
@@ -559,7 +612,8 @@ def _choose_partner(
     goes on toward the open one. A trade that shortens the summed distance is agreed with a
     neighbour on the move too (both hold still for it): two robots that met head-on in a
     corridor each stepped aside for the other, in step, and never once both stood still to
-    trade."""
+    trade. A robot never trades for a goal it knows a third robot rests on (see
+    `_held_twice`)."""
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me]
@@ -592,7 +646,8 @@ def _choose_partner(
     score = np.where(gain > 0, 2 * gain + asked, np.where(still & (fair | push | pushed), 1, 0))
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
     again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
-    score = np.where(talk & ~same & ~again, score, 0)
+    held = their_has & ~resting_there & np.isin(_key(me, their_cell), rested)
+    score = np.where(talk & ~same & ~again & ~held, score, 0)
     best = _best_per_robot(len(sense), me, -score, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
     wants[best >= 0] = msg[best[best >= 0], NUMBER]
