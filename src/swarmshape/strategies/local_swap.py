@@ -22,7 +22,7 @@ from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import SEED_CELLS
-from swarmshape.strategies import register
+from swarmshape.strategies import register, routes
 
 LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY = range(
     16
@@ -42,6 +42,17 @@ of no open cell."""
 OPEN_REACH = 24
 """Hops an open cell is relayed. A filled cell's news dies out by counting up to this (each
 robot takes its neighbours' fewest hops plus one), so it bounds how long a stale one lasts."""
+
+LOYALTY = 2
+"""Hops of news a robot gives up to keep to the open cell it heard of last step. Two seekers
+in a horseshoe's bay, with open cells at the ends of both arms, heard of the other one every
+few steps, turned each time, and never reached either."""
+
+LOST_REACH = 24
+"""Hops to a localised robot past which a robot counts as hearing of none. Three robots that
+lost their bearings far from the others each heard the other two tell of a way back that ran
+through itself, and counted up to `FAR` one hop a step before they set out to search, for a
+thousand steps."""
 
 PATIENCE = 4
 """Steps a robot waits behind something before it goes round it (see `_go_round`)."""
@@ -104,6 +115,7 @@ class LocalSwap(Program):
         "stuck": Slot(np.int64, 0),
         "heard": Slot(np.int64, 0, 2),
         "heard_hops": Slot(np.int64, FAR),
+        "routed": Slot(bool, False),
     }
 
     def act(
@@ -137,19 +149,21 @@ class LocalSwap(Program):
         has_goal = memory.localised & memory.has_goal
         memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
         going = (has_goal | seeking) & (memory.frame != target).any(axis=1)
+        same_aim = (target == memory.aim).all(axis=1)
         _note_progress(memory, target)
+        waypoint = _route(sense, memory, target, going & sense.ready, same_aim, self.senses.radius)
         arrived = sense.moved.any(axis=1)
         memory.came[arrived] = _direction(-sense.moved[arrived])
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
-        preferred, first = _plan(sense, target - memory.frame, behind, going, self.senses.radius)
+        delta = waypoint - memory.frame
+        preferred, first = _plan(sense, delta, behind, going, self.senses.radius)
         memory.wants = _choose_partner(
             sense, memory, preferred, target, seeking, news, news_hops, rested
         )
-        moves = _go_round(
-            memory, target - memory.frame, preferred, first, occupied, going & sense.ready, rng
-        )
-        astray = going & sense.ready & (memory.stuck > STUCK) & (rng.random(len(sense)) < 0.25)
+        moves = _go_round(memory, delta, preferred, first, occupied, going & sense.ready, rng)
+        astray = going & sense.ready & (memory.stuck > STUCK) & ~memory.routed
+        astray &= rng.random(len(sense)) < 0.25
         moves[astray] = _random_free(occupied[astray], rng)
         moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
         hops, toward = _hops(sense, memory)
@@ -198,6 +212,31 @@ def _note_progress(memory: Memory, target: np.ndarray) -> None:
     memory.stuck = np.where(new | nearer, 0, memory.stuck + aiming)
     memory.closest = np.where(new | nearer, left, memory.closest)
     memory.aim[aiming] = target[aiming]
+
+
+def _route(
+    sense: Perception,
+    memory: Memory,
+    target: np.ndarray,
+    ready: np.ndarray,
+    same_aim: np.ndarray,
+    radius: float,
+) -> np.ndarray:
+    """The cell each robot plans toward: its target, or for a robot outside the shape that
+    made no headway for `STUCK` steps, a cell a few steps along the shortest way round the
+    shape to it (`routes`). It keeps to the route while its target stays the same: back on
+    the direct way, it walked straight back to where it was stuck."""
+    kept = memory.routed & same_aim
+    outside = ~sense.blueprint.contains(sense.group, memory.frame)
+    rows = np.flatnonzero(ready & outside & (kept | (memory.stuck > STUCK)))
+    cells, found = routes.waypoints(
+        sense.blueprint, sense.group[rows], memory.frame[rows], target[rows], int(radius)
+    )
+    memory.routed = np.where(ready, False, kept)
+    memory.routed[rows[found]] = True
+    waypoint = target.copy()
+    waypoint[rows[found]] = cells[found]
+    return waypoint
 
 
 def _first_goals(sense: Perception, memory: Memory) -> None:
@@ -338,7 +377,8 @@ def _relay_open(
     news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
     news &= memory.localised[me]
     news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
-    best = _best_per_robot(len(sense), me, msg[:, OPEN_HOPS], news)
+    known = (msg[:, OX : OY + 1] == memory.heard[me]).all(axis=1)
+    best = _best_per_robot(len(sense), me, msg[:, OPEN_HOPS] - LOYALTY * known, news)
     told = (best >= 0) & ~seen
     cell, hops = sight.copy(), np.where(seen, 0, FAR)
     cell[told] = msg[best[told], OX : OY + 1]
@@ -447,7 +487,7 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
     found = best >= 0
     nearest = np.full(len(sense), FAR, dtype=np.int64)
     nearest[found] = heard_hops[best[found]]
-    hops = np.where(memory.localised, 0, np.minimum(nearest + 1, FAR))
+    hops = np.where(memory.localised, 0, np.where(nearest < LOST_REACH, nearest + 1, FAR))
     offset = np.zeros((len(sense), 2))
     offset[found] = sense.offset[best[found]]
     along_x = np.abs(offset[:, 0]) >= np.abs(offset[:, 1])
