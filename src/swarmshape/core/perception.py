@@ -62,9 +62,9 @@ class Blueprint:
     @classmethod
     def of(cls, frame_cells: list[np.ndarray]) -> Blueprint:
         boxes = []
-        for cells in frame_cells:
-            low = cells.min(axis=0) if len(cells) else np.zeros(2, dtype=np.int64)
-            high = cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)
+        for cells in frame_cells:  # each box with a border of -1, where lookups off it land
+            low = (cells.min(axis=0) if len(cells) else np.zeros(2, dtype=np.int64)) - 1
+            high = (cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)) + 1
             grid = np.full(high - low, -1, dtype=np.int64)
             grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = np.arange(len(cells))
             boxes.append((low, grid))
@@ -76,13 +76,7 @@ class Blueprint:
 
     def number(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
         """The number of each frame cell ``(k, 2)`` in its group's shape, or -1 (not in it)."""
-        found = np.full(len(frame), -1, dtype=np.int64)
-        for group, (low, grid) in enumerate(self._boxes):
-            mine = np.flatnonzero(groups == group)
-            local = frame[mine] - low
-            fits = ((local >= 0) & (local < grid.shape)).all(axis=1)
-            found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
-        return found
+        return box_lookup(self._boxes, groups, frame)
 
     def contains(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
         """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
@@ -95,6 +89,20 @@ class Blueprint:
             mine = groups == group
             out[mine] = cells[numbers[mine]]
         return out
+
+
+def box_lookup(
+    boxes: tuple[tuple[np.ndarray, np.ndarray], ...], groups: np.ndarray, frame: np.ndarray
+) -> np.ndarray:
+    """Per frame cell ``(k, 2)``, the value in its group's grid: `boxes` holds per group the
+    frame cell of the grid's corner and the grid, whose one-cell border holds the value for
+    any cell off it (a lookup off the grid is clipped onto the border)."""
+    found = np.zeros(len(frame), dtype=boxes[0][1].dtype if boxes else np.int64)
+    for group, (low, grid) in enumerate(boxes):
+        mine = np.flatnonzero(groups == group) if len(boxes) > 1 else slice(None)
+        local = np.clip(frame[mine] - low, 0, np.array(grid.shape) - 1)
+        found[mine] = grid[local[:, 0], local[:, 1]]
+    return found
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,7 +20,7 @@ from scipy import ndimage
 
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import STEPS
-from swarmshape.core.perception import Blueprint, Perception
+from swarmshape.core.perception import Blueprint, Perception, box_lookup
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
 
@@ -410,7 +410,7 @@ def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarr
     rim of new rows never wall the inner row in. Each such step raises the summed depth of
     occupied cells, so it ends."""
     depth = _depth(sense.blueprint)
-    mine = _depth_at(depth, sense.group, memory.frame)
+    mine = box_lookup(depth, sense.group, memory.frame)
     held = np.zeros_like(occupied)
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
@@ -418,7 +418,7 @@ def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarr
     best, way = mine.copy(), np.zeros(len(sense), dtype=np.int64)
     for direction in range(1, len(STEPS)):
         held[me[talk & (relative == STEPS[direction]).all(axis=1)], direction] = True
-        there = _depth_at(depth, sense.group, memory.frame + STEPS[direction])
+        there = box_lookup(depth, sense.group, memory.frame + STEPS[direction])
         better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
         best, way = np.where(better, there, best), np.where(better, direction, way)
     return np.where(mine > 0, way, 0)
@@ -443,18 +443,6 @@ def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         depth = ndimage.distance_transform_cdt(inside, metric="taxicab")
         out.append((low, np.where(grid, depth, 0)))
     return tuple(out)
-
-
-def _depth_at(
-    depth: tuple[tuple[np.ndarray, np.ndarray], ...], groups: np.ndarray, frame: np.ndarray
-) -> np.ndarray:
-    found = np.zeros(len(frame), dtype=np.int64)
-    for group, (low, grid) in enumerate(depth):
-        mine = np.flatnonzero(groups == group)
-        local = frame[mine] - low
-        fits = ((local >= 0) & (local < grid.shape)).all(axis=1)
-        found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
-    return found
 
 
 def localise(sense: Perception, memory: Memory) -> None:
