@@ -1,4 +1,5 @@
-"""Routes round a known shape: shortest, outside the shape, and none into a walled-in cell."""
+"""Routes round a known shape: shortest, outside the shape where they can be, and through as
+few of its cells as they must."""
 
 from __future__ import annotations
 
@@ -51,10 +52,12 @@ def test_a_route_goes_round_the_shape_and_ends_on_its_target():
     assert len(path) - 1 == 4 + 6 + 5 + 2 + 1
 
 
-def test_no_route_into_a_cell_the_shape_walls_in():
-    shape = blueprint_of("###\n###\n###")
-    _, found = routes.waypoints(shape, np.zeros(1, int), np.array([[6, 1]]), np.array([[1, 1]]), 3)
-    assert not found[0]
+def test_a_route_into_a_walled_in_cell_crosses_the_fewest_shape_cells():
+    shape = blueprint_of("#####\n#####\n#####\n#####\n#####")
+    inside = {tuple(c) for c in shape.cells[0].tolist()}
+    path = walk(shape, (8, 2), (2, 2))  # the centre of a 5 by 5 block, from the east
+    assert sum(cell in inside for cell in path) == 3  # (4, 2), (3, 2) and the target
+    assert len(path) - 1 == 6
 
 
 def test_a_robot_far_off_the_map_has_no_route():

@@ -664,8 +664,9 @@ def _choose_partner(
     in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
     their_news = msg[:, OPEN_HOPS]
     push = in_the_way & resting_there & ~my_has & (their_news <= PUSH_HOPS)
-    pushed_on = memory.gave & (memory.since_trade < TABU)  # a push goes on down the chain
-    push &= (memory.stuck > STUCK)[me] | pushed_on[me]
+    pushed_on = memory.gave & (memory.since_trade < TABU) & (memory.given == memory.frame).all(1)
+    pushed_on = pushed_on[me]  # out of the cell it stands on: the push goes on down the chain
+    push &= (memory.stuck > STUCK)[me] | pushed_on
     pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
     open_at = news[me]
     nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)

@@ -3,8 +3,9 @@
 A local program plans over the few cells its robot senses, and a formed shape is an obstacle
 far wider than that: a robot on the wrong side of an arm, whose target faces the shape's bay,
 walked back and forth along the arm for a thousand steps. Every robot knows the bitmap and
-the seeds in its frame, so it can find the way round them alone: the path through cells
-outside the shape that ends on its target. Robots in the way are left to the local planner.
+the seeds in its frame, so it can find the way round them alone: the path to its target that
+crosses the fewest shape cells (formed ones let a robot through only by trading), and of
+those the shortest. Robots in the way are left to the local planner.
 """
 
 from __future__ import annotations
@@ -27,9 +28,8 @@ out walks straight in until it is within the margin."""
 def waypoints(
     blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, target: np.ndarray, ahead: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """For robots outside their shape, the cell `ahead` steps along the shortest way round the
-    shape to each one's `target` (a shape cell with outside beside it), and whether there is
-    such a way."""
+    """For robots outside their shape, the cell `ahead` steps along the way round the shape to
+    each one's `target`, and whether there is such a way (none off the map, or past seeds)."""
     found = np.zeros(len(frame), dtype=bool)
     out = target.copy()
     for group in np.unique(groups):
@@ -54,7 +54,7 @@ def waypoints(
 
 
 def _distance(fields: np.ndarray, which: np.ndarray, at: np.ndarray, size: np.ndarray):
-    """Each robot's distance to its target along its field, at cells `at` (inf off the box)."""
+    """Each robot's route cost to its target at cells `at` (inf off the box)."""
     inside = ((at >= 0) & (at < size)).all(axis=1)
     distance = np.full(len(at), np.inf)
     distance[inside] = fields[which[inside], at[inside, 0], at[inside, 1]]
@@ -71,9 +71,10 @@ def _box(blueprint: Blueprint, group: int) -> tuple[np.ndarray, np.ndarray]:
 
 @functools.lru_cache(maxsize=16)
 def _moves(blueprint: Blueprint, group: int):
-    """The moves a route may take, as a graph over the box's cells, reversed (from the
-    target out): from a free cell to a free one, and out of a shape cell onto a free one, so
-    the one shape cell a route enters is its end. Seeds are never crossed."""
+    """The moves a route may take, as a weighted graph over the box's cells, reversed (from
+    the target out): a step onto a free cell costs 1, onto a shape cell more than any way
+    round through free cells, so a route crosses as few shape cells as it can. Seeds are
+    never crossed."""
     low, size = _box(blueprint, group)
     shape = np.zeros(size, dtype=bool)
     cells = blueprint.cells[group] - low
@@ -82,27 +83,30 @@ def _moves(blueprint: Blueprint, group: int):
     seeds[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
     free = ~shape & ~seeds
     index = np.arange(shape.size).reshape(size)
-    sources, sinks = [], []
+    sources, sinks, weights = [], [], []
+    cost = np.where(free, 1.0, float(shape.size)).ravel()
     for dx, dy in ((1, 0), (0, 1)):
-        a = index[: size[0] - dx, : size[1] - dy]
-        b = index[dx:, dy:]
+        a = index[: size[0] - dx, : size[1] - dy].ravel()
+        b = index[dx:, dy:].ravel()
         for one, other in ((a, b), (b, a)):
-            ok = free.ravel()[other] & ~seeds.ravel()[one]
+            ok = ~seeds.ravel()[other] & ~seeds.ravel()[one]
             sources.append(one[ok])
             sinks.append(other[ok])
+            weights.append(cost[one[ok]])  # a robot steps from `other` into `one`
     sources, sinks = np.concatenate(sources), np.concatenate(sinks)
-    ones = np.ones(len(sources))
-    return coo_matrix((ones, (sources, sinks)), shape=(shape.size, shape.size)).tocsr()
+    matrix = coo_matrix((np.concatenate(weights), (sources, sinks)), shape=(shape.size,) * 2)
+    return matrix.tocsr(), cost
 
 
 @functools.lru_cache(maxsize=4096)
 def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
-    """Steps from each cell of the box to frame cell ``(x, y)`` by a route round the shape
-    (inf: none, or the target is off the box)."""
+    """The cost of a route to frame cell ``(x, y)`` from each cell of the box, counting the
+    step into that cell too, so a route goes to the neighbour of least cost (inf: no route,
+    or the target is off the box)."""
     low, size = _box(blueprint, group)
     local = np.array([x, y]) - low
     if not ((local >= 0) & (local < size)).all():
         return np.full(tuple(size), np.inf)
-    graph = _moves(blueprint, group)
+    graph, cost = _moves(blueprint, group)
     start = int(local[0] * size[1] + local[1])
-    return dijkstra(graph, indices=start, unweighted=True).reshape(tuple(size))
+    return (dijkstra(graph, indices=start) + cost).reshape(tuple(size))
