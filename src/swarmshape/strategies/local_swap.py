@@ -124,7 +124,7 @@ class LocalSwap(Program):
         localise(sense, memory)
         _first_goals(sense, memory)
         rested = _goals_at_rest(sense, memory)  # before trading, as the messages tell them
-        twice, twice_cell = _held_twice(sense, memory, rested)
+        twice, twice_cell = _held_twice(sense, rested)
         _yield_taken(sense, memory)
         _trade(sense, memory)
         memory.has_goal &= sense.blueprint.contains(sense.group, memory.goal)  # a reshape
@@ -223,8 +223,8 @@ def _route(
     radius: float,
 ) -> np.ndarray:
     """The cell each robot plans toward: its target, or for a robot outside the shape that
-    made no headway for `STUCK` steps, a cell a few steps along the shortest way round the
-    shape to it (`routes`). It keeps to the route while its target stays the same: back on
+    made no headway for `STUCK` steps, a cell a few steps along its way round the shape to
+    it (`routes`). It keeps to the route while its target stays the same: back on
     the direct way, it walked straight back to where it was stuck."""
     kept = memory.routed & same_aim
     outside = ~sense.blueprint.contains(sense.group, memory.frame)
@@ -287,9 +287,7 @@ def _key(robot: np.ndarray, cell: np.ndarray) -> np.ndarray:
     return (robot.astype(np.int64) * span + cell[:, 0] + span // 2) * span + cell[:, 1] + span // 2
 
 
-def _held_twice(
-    sense: Perception, memory: Memory, rested: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _held_twice(sense: Perception, rested: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per robot, whether it hears a neighbour on its way to a goal that another robot rests
     on, and that goal: it says so, and the one on its way gives the goal up. Without this a
     spare robot that claimed a cell whose holder was far away kept the goal, traded it into

@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from swarmshape.core.motion import STEPS
@@ -29,7 +29,8 @@ def waypoints(
     blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, target: np.ndarray, ahead: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """For robots outside their shape, the cell `ahead` steps along the way round the shape to
-    each one's `target`, and whether there is such a way (none off the map, or past seeds)."""
+    each one's `target`, and whether there is such a way (none for a robot beyond the margin
+    round the shape, or for a target the seeds wall in)."""
     found = np.zeros(len(frame), dtype=bool)
     out = target.copy()
     for group in np.unique(groups):
@@ -53,7 +54,9 @@ def waypoints(
     return out, found
 
 
-def _distance(fields: np.ndarray, which: np.ndarray, at: np.ndarray, size: np.ndarray):
+def _distance(
+    fields: np.ndarray, which: np.ndarray, at: np.ndarray, size: np.ndarray
+) -> np.ndarray:
     """Each robot's route cost to its target at cells `at` (inf off the box)."""
     inside = ((at >= 0) & (at < size)).all(axis=1)
     distance = np.full(len(at), np.inf)
@@ -70,7 +73,7 @@ def _box(blueprint: Blueprint, group: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=16)
-def _moves(blueprint: Blueprint, group: int):
+def _moves(blueprint: Blueprint, group: int) -> tuple[csr_matrix, np.ndarray]:
     """The moves a route may take, as a weighted graph over the box's cells, reversed (from
     the target out): a step onto a free cell costs 1, onto a shape cell more than any way
     round through free cells, so a route crosses as few shape cells as it can. Seeds are
@@ -98,7 +101,7 @@ def _moves(blueprint: Blueprint, group: int):
     return matrix.tocsr(), cost
 
 
-@functools.lru_cache(maxsize=4096)
+@functools.lru_cache(maxsize=512)  # a field is 8 bytes a cell: 92 MB at 10,000 robots
 def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
     """The cost of a route to frame cell ``(x, y)`` from each cell of the box, counting the
     step into that cell too, so a route goes to the neighbour of least cost (inf: no route,
