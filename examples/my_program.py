@@ -15,7 +15,9 @@ class Gather(Program):
     name = "gather"
     description = "walk down the hop count to the seeds; stop on touching a robot that has"
     message_size = 1
-    memory: ClassVar[dict[str, Slot]] = {"hops": Slot(np.int64, 999)}
+    memory: ClassVar[dict[str, Slot]] = {"hops": Slot(np.int64, 999), "state": Slot(np.int64)}
+    states = ("resting", "heading in", "lost")  # the viewer colours robots by memory.state
+    shown = "hops"  # and prints this slot on them (key g)
 
     def act(self, sense, memory, rng):
         heard = np.where(sense.seed, -1, np.where(sense.heard, sense.message[:, 0], 999))
@@ -34,6 +36,7 @@ class Gather(Program):
         moves[sense.owner[toward]] = step[toward]
         wander = (nearest >= 999) & (rng.random(len(sense)) < 0.5)  # lost: look around
         moves[wander] = rng.integers(1, 5, wander.sum())
+        memory.state = np.where(nearest >= 999, 2, np.where(moves > 0, 1, 0))
         return moves, memory.hops[:, None]
 
 

@@ -1,6 +1,8 @@
 """Save what the window shows after some steps, without a screen (for docs and for looking).
 
 python scripts/screenshot.py shapes/horseshoe.png --steps 1600 --out docs/horseshoe.png
+python scripts/screenshot.py shapes/square.png --cells 12 --strategy examples/my_program.py:Gather \
+    --steps 60 --size 960 600 --overlay values --overlay links --out docs/local-overlays.png
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
 from swarmshape.runs import configure, load_world, start_cells, start_swarm
+from swarmshape.ui.render import OVERLAYS
 from swarmshape.ui.viewer import Viewer
 
 
@@ -27,7 +30,10 @@ def main() -> None:
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 800))
     parser.add_argument("--strategy", default="optimal")
     parser.add_argument("--start", help="packed, scatter or a CSV (as the run's --start)")
-    parser.add_argument("--cells", type=int)
+    parser.add_argument("--cells", type=int, help="cells across the shape's long side")
+    parser.add_argument(
+        "--overlay", action="append", default=[], choices=OVERLAYS, help="a local program's"
+    )
     args = parser.parse_args()
     config = configure(
         args.path, seed=args.seed, strategy=args.strategy, start=args.start, cells=args.cells
@@ -45,6 +51,7 @@ def main() -> None:
     while viewer.swarm.step_count < args.steps:
         viewer.swarm.step()
     viewer.paused = True
+    viewer.overlays = set(args.overlay)
     viewer.tick()
     pygame.image.save(viewer.screen, args.out)
     print(f"{args.out}: step {viewer.swarm.step_count}")

@@ -2,6 +2,11 @@
 invariants as it goes and that memory stays flat. Not part of the test suite.
 
     .venv/bin/python scripts/soak.py [--steps 1000000] [--strategy optimal] [--every 20000]
+    .venv/bin/python scripts/soak.py --failure-rate 2e-6 --spares 150    # fault mode
+
+Fault mode adds a steady failure rate (each robot removed with that chance per step) and a
+supply of spare robots; a live shape change then asks for the shape at the largest scale the
+robots left can fill, and the report says how many faults struck and how many healed.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ import numpy as np
 
 from swarmshape.core.audit import overlapping_pairs
 from swarmshape.core.shape import Shape
+from swarmshape.core.states import STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.io.bitmap import load_grid
@@ -31,7 +37,7 @@ def resident_mb() -> float:
 
 def violations(swarm: Swarm) -> list[str]:
     found = []
-    pos = swarm.positions()
+    pos = swarm.positions()[swarm.present]
     width, height = swarm.world.size
     if not np.isfinite(pos).all():
         found.append("non-finite position")
@@ -39,8 +45,8 @@ def violations(swarm: Swarm) -> list[str]:
         found.append("left the arena")
     if len(overlapping_pairs(np.concatenate([pos, swarm.world.seeds + 0.5]))[0]):
         found.append("overlap")
-    if len(swarm.cell) != swarm.world.agents:
-        found.append("agents not conserved")
+    if swarm.present.sum() + swarm.faults.lost != swarm.world.agents:
+        found.append("robots not conserved (present + removed != agents)")
     return found
 
 
@@ -50,12 +56,15 @@ def main() -> None:
     parser.add_argument("--strategy", default="optimal")
     parser.add_argument("--every", type=int, default=20_000, help="steps between shape changes")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--failure-rate", type=float, default=0.0, help="fault mode: P per step")
+    parser.add_argument("--spares", type=int, default=30, help="robots beyond the largest shape")
     args = parser.parse_args()
 
     shapes = [Shape(load_grid(SHAPES / name)) for name in ("horseshoe.png", "square.png")]
-    agents = max(s.count for s in shapes) + 30  # spare robots that wander
+    agents = max(s.count for s in shapes) + args.spares  # spare robots that wander
     world = build_world([GroupSpec("soak", shapes[0], (58, 111, 216), agents)])
-    swarm = start_swarm(RunConfig(strategy=args.strategy, seed=args.seed), world)
+    config = RunConfig(strategy=args.strategy, seed=args.seed, failure_rate=args.failure_rate)
+    swarm = start_swarm(config, world)
     started, broken, changes, reformed = time.perf_counter(), [], 0, []
     memory = {}
     while swarm.step_count < args.steps:
@@ -67,7 +76,10 @@ def main() -> None:
         if swarm.step_count % args.every == 0:
             reformed.append(swarm.complete)
             changes += 1
-            swarm.reshape(0, shapes[changes % 2])
+            mobile = int((swarm.present & (swarm.state != STALLED)).sum())
+            if mobile == 0:
+                break
+            swarm.reshape(0, shapes[changes % 2].fitted(mobile))
     memory["at the end"] = resident_mb()
     seconds = time.perf_counter() - started
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -80,6 +92,16 @@ def main() -> None:
         print(f"resident memory {when}: {mb:.1f} MB")
     print(f"peak resident memory: {peak:.1f} MB")
     print(f"overlaps counted: {swarm.overlap_total}; invariant violations: {len(broken)}")
+    log = swarm.faults.log
+    if log:
+        healed = [f["recovery_steps"] for f in log if f["recovery_steps"] is not None]
+        print(
+            f"faults: {len(log)} struck, {swarm.faults.lost} robots removed, {len(healed)} "
+            f"healed (slowest {max(healed, default=0)} steps, mean "
+            f"{np.mean(healed) if healed else 0:.0f}); unhealed at the end: "
+            f"{len(log) - len(healed)}; final scale {swarm.world.groups[0].shape.scale:.2f}, "
+            f"{len(swarm.world.targets)} cells, {int(swarm.present.sum())} robots left"
+        )
     for line in broken[:10]:
         print("  " + line)
 

@@ -53,7 +53,7 @@ def bad_files(tmp_path_factory) -> Path:
         "shapes = ['one.png']\nstrategies = ['optimal']\nspeed = 3\n"
     )
     (folder / "old.state").write_bytes(b"swarmshape state 1\n\x80\x05garbage")
-    manifest = {"format": "swarmshape state", "version": 2, "values": {}, "arrays": []}
+    manifest = {"format": "swarmshape state", "version": 3, "values": {}, "arrays": []}
     with (folder / "damaged.state").open("wb") as handle:
         text = json.dumps({**manifest, "checksum": "0"}).encode()
         np.savez(handle, manifest=np.frombuffer(text, dtype=np.uint8))
@@ -72,6 +72,12 @@ def bad_files(tmp_path_factory) -> Path:
     (folder / "code.toml").write_text("strategy = 'this:X'\n[[groups]]\nshape = 'one.png'\n")
     (folder / "code-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['evil:X']\n")
     (folder / "nope-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['nope']\n")
+    (folder / "faults.toml").write_text(
+        "[[faults]]\nstep = 3\nkind = 'melt'\n[[groups]]\nshape = 'one.png'\n"
+    )
+    (folder / "fault-sweep.toml").write_text(
+        "shapes = ['one.png']\nstrategies = ['optimal']\nfail = ['0.2']\n"
+    )
     (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
     (folder / "letters.csv").write_text("x,y\na,b\n")
     (folder / "broken_strategy.py").write_text(

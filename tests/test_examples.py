@@ -15,6 +15,9 @@ PROMISES = {
     "my_strategy.py": "no problems found",
     "frames.py": "frames of shape (200, 320, 3) and dtype uint8",
     "my_program.py": "cells from a seed",
+    "learn_random.py": "a frame of shape (400, 640, 3)",
+    "learn_scripted.py": "shape formed: True, coverage 100%",
+    "learn_cem.py": "coverage with the trained policy: 33% (from 0%)",
 }
 
 

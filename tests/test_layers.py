@@ -24,6 +24,10 @@ ALLOWED = {
            "swarmshape.io", "swarmshape.ui", "swarmshape.runs"},
     "experiments": {"numpy", "matplotlib", "dask", "swarmshape.core", "swarmshape.errors",
                     "swarmshape.io", "swarmshape.experiments", "swarmshape.runs"},
+    # the learning environment draws with the window's renderer, loaded only to render
+    "env": {"numpy", "gymnasium", "pettingzoo", "pygame", "swarmshape.core",
+            "swarmshape.errors", "swarmshape.io", "swarmshape.env", "swarmshape.runs",
+            "swarmshape.ui.render"},
 }  # fmt: skip
 
 
@@ -67,9 +71,27 @@ def test_a_headless_formation_from_code_never_loads_pygame():
         "    swarm.step()\n"
         "print(sorted(m for m in ('pygame', 'PIL', 'matplotlib') if m in sys.modules))\n"
     )
+    assert loaded_by(code) == "[]"
+
+
+def loaded_by(code: str) -> str:
+    """What `code`, run in a fresh interpreter, prints."""
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
-    assert result.stdout.strip() == "[]"
+    return result.stdout.strip()
+
+
+def test_the_learning_environment_steps_without_loading_pygame():
+    code = (
+        "import sys\n"
+        "import numpy as np\n"
+        "import swarmshape.env\n"
+        "vec = swarmshape.env.vector_env(np.ones((2, 3), bool), max_steps=5)\n"
+        "vec.reset(seed=1)\n"
+        "vec.step(np.zeros(vec.num_envs, dtype=np.int64))\n"
+        "print(sorted(m for m in ('pygame', 'matplotlib') if m in sys.modules))\n"
+    )
+    assert loaded_by(code) == "[]"
 
 
 def test_the_public_names_are_where_the_package_says():

@@ -2,10 +2,11 @@
 broke: ``check_strategy("optimal")`` or ``swarmshape check my_strategies.py:Mine``.
 
 Each random shape is run twice with the same seed. At every step the robots' squares must not
-overlap (seeds included), stay in the arena, keep their number, and settled robots must stay
-where they are; the two runs must be identical step by step (randomness from anywhere but
-``swarm.rng`` shows up here); and the shape must form within the step limit and stay formed
-for `AFTER_FORMED` steps more.
+overlap (seeds included), stay in the arena, keep their number (robots are conserved except
+those a fault removed), and settled robots must stay where they are; the two runs must be
+identical step by step (randomness from anywhere but ``swarm.rng`` shows up here); and the
+shape must form within the step limit and stay formed for `AFTER_FORMED` steps more (unless a
+fault opened it again).
 """
 
 from __future__ import annotations
@@ -41,28 +42,35 @@ class InvariantWatch(Observer):
         self._cells: np.ndarray | None = None
         self._settled: np.ndarray | None = None
         self._formed = False
+        self._faults = 0
 
     def capture(self, swarm: Swarm) -> None:
         step = swarm.step_count
-        pos = swarm.positions()
+        present = swarm.present
+        pos = swarm.positions()[present]
         width, height = swarm.world.size
         if not (np.isfinite(pos).all() and np.isfinite(swarm.speed).all()):
             self._note(f"step {step}: a position or speed is not a finite number")
         elif (
             (pos < 0.5).any() or (pos[:, 0] > width - 0.5).any() or (pos[:, 1] > height - 0.5).any()
         ):
-            robot = int(
-                np.flatnonzero(((pos < 0.5) | (pos > (width - 0.5, height - 0.5))).any(1))[0]
-            )
+            outside = ((pos < 0.5) | (pos > (width - 0.5, height - 0.5))).any(1)
+            robot = int(np.flatnonzero(present)[np.flatnonzero(outside)[0]])
             self._note(f"step {step}: robot {robot} left the {width}x{height} arena")
         everything = np.concatenate([pos, swarm.world.seeds + 0.5])
         i, j = overlapping_pairs(everything)
         if len(i):
-            self._note(f"step {step}: {_name(i[0], len(pos))} and {_name(j[0], len(pos))} overlap")
-        if len(swarm.cell) != swarm.world.agents:
+            ids = np.flatnonzero(present)
+            first, second = _name(i[0], ids), _name(j[0], ids)
+            self._note(f"step {step}: {first} and {second} overlap")
+        removed = sum(f["robots"] for f in swarm.faults.log if f["kind"] != "stall")
+        if len(pos) + removed != swarm.world.agents or swarm.faults.lost != removed:
             self._note(
-                f"step {step}: {len(swarm.cell)} robots where there were {swarm.world.agents}"
+                f"step {step}: {len(pos)} robots where there were {swarm.world.agents} "
+                f"and faults removed {removed}"
             )
+        if len(swarm.faults.log) != self._faults:  # a fault may open cells of a formed shape
+            self._faults, self._formed = len(swarm.faults.log), False
         if self._settled is not None:
             still = self._settled & (swarm.state == SETTLED)
             moved = np.flatnonzero(still & (swarm.cell != self._cells).any(axis=1))
@@ -72,7 +80,7 @@ class InvariantWatch(Observer):
             self._note(f"step {step}: the formed shape lost a cell without any change to it")
         self._formed |= swarm.complete
         self._cells, self._settled = swarm.cell.copy(), swarm.state == SETTLED
-        self.digest.update(np.ascontiguousarray(pos).tobytes())
+        self.digest.update(np.ascontiguousarray(swarm.positions()).tobytes())
         self.digest.update(swarm.state.tobytes())
 
     def _note(self, problem: str) -> None:
@@ -80,8 +88,9 @@ class InvariantWatch(Observer):
             self.problems.append(problem)
 
 
-def _name(index: int, robots: int) -> str:
-    return f"robot {index}" if index < robots else f"seed {index - robots}"
+def _name(index: int, robots: np.ndarray) -> str:
+    """Robot or seed number `index` of the squares checked: the robots present, then seeds."""
+    return f"robot {robots[index]}" if index < len(robots) else f"seed {index - len(robots)}"
 
 
 @dataclass

@@ -18,6 +18,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
+from swarmshape.core.faults import FaultEvent, parse_event, parse_region
 from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError
 from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume
@@ -29,7 +30,7 @@ NOT_FORMED = 3
 """Exit status of a headless run that stopped before its shape formed (and of a failed check)."""
 RUN_OPTIONS = ("strategy", "order", "seed", "agents", "cells", "threshold", "arena",
                "max_speed", "max_accel", "max_steps", "start", "fit", "speed_variation",
-               "sense_radius", "distance_noise", "msg_loss")  # fmt: skip
+               "sense_radius", "distance_noise", "msg_loss", "failure_rate")  # fmt: skip
 """Command-line options that are fields of `RunConfig` (``--invert`` too, when given)."""
 
 
@@ -202,6 +203,33 @@ def _shared_options() -> argparse.ArgumentParser:
     sim.add_argument(
         "--load-state", type=Path, help="resume a run saved with --save-state (PATH not needed)"
     )
+    faults = shared.add_argument_group("faults")
+    faults.add_argument(
+        "--fail",
+        action="append",
+        metavar="FRACTION@STEP",
+        help="remove that fraction of the robots (or a number, e.g. 50@300), chosen at random, "
+        "at that step; repeatable",
+    )
+    faults.add_argument(
+        "--fail-region",
+        action="append",
+        metavar="X,Y,W,H@STEP",
+        help="remove every robot in that rectangle of cells (X,Y,R: a disc) at that step; "
+        "repeatable",
+    )
+    faults.add_argument(
+        "--stall",
+        action="append",
+        metavar="FRACTION@STEP",
+        help="stop that fraction of the robots for good where they stand; repeatable",
+    )
+    faults.add_argument(
+        "--failure-rate",
+        type=float,
+        metavar="P",
+        help="each robot fails (is removed) with probability P per step (default 0)",
+    )
     record = shared.add_argument_group("recording")
     record.add_argument("--record", type=Path, help="write an animation: .gif, .webp or .png")
     record.add_argument("--frames", type=Path, help="write numbered PNG frames to this folder")
@@ -318,6 +346,7 @@ def run_session(args: argparse.Namespace) -> int:
     max_steps = getattr(args, "max_steps", None)
     given = {name: getattr(args, name, None) for name in RUN_OPTIONS}
     given["invert"] = args.invert or None
+    given["faults"] = fault_events(args)
     if args.load_state is not None:
         _nothing_that_a_resume_ignores(args, given)
         config = RunConfig(**({} if max_steps is None else {"max_steps": max_steps}))
@@ -355,6 +384,14 @@ def run_session(args: argparse.Namespace) -> int:
         speed=args.speed,
     ).start()
     return NOT_FORMED if not window and metrics["steps"] is None else 0
+
+
+def fault_events(args: argparse.Namespace) -> tuple[FaultEvent, ...] | None:
+    """The fault options as events, in the order given; None when there are none."""
+    events = [parse_event(text, "remove", "--fail") for text in args.fail or ()]
+    events += [parse_region(text) for text in args.fail_region or ()]
+    events += [parse_event(text, "stall", "--stall") for text in args.stall or ()]
+    return tuple(events) or None
 
 
 def _nothing_that_a_resume_ignores(args: argparse.Namespace, given: dict) -> None:

@@ -24,10 +24,13 @@ from typing import Any
 import numpy as np
 
 from swarmshape import strategies
+from swarmshape.core.faults import FaultEvent, Faults, check_rate, events_from_values
 from swarmshape.core.grid import has_hole
+from swarmshape.core.local import Program
 from swarmshape.core.motion import Limits
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
+from swarmshape.core.steering import Strategy
 from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import START_LAYOUTS, World, build_world, packed_start
 from swarmshape.errors import InputError
@@ -73,6 +76,10 @@ class RunConfig:
     """Local programs: how far, in cells, a robot senses and hears its neighbours."""
     distance_noise: float = Senses.distance_noise
     msg_loss: float = Senses.msg_loss
+    faults: tuple[FaultEvent, ...] = ()
+    """Fault events: robots removed or stalled at given steps (see `swarmshape.core.faults`)."""
+    failure_rate: float = 0.0
+    """Chance per robot per step that it fails and is removed."""
 
     def __post_init__(self) -> None:
         if self.seed is not None and not 0 <= self.seed < 2**63:
@@ -92,6 +99,8 @@ class RunConfig:
         Limits(self.max_speed, self.max_accel)  # checks them
         Params(speed_variation=self.speed_variation)
         self.senses()
+        object.__setattr__(self, "faults", events_from_values(self.faults, "faults"))
+        object.__setattr__(self, "failure_rate", check_rate(self.failure_rate))
 
     def senses(self) -> Senses:
         """How well a local program's robots sense and talk."""
@@ -107,6 +116,7 @@ class RunConfig:
         for name in ("shape", "start"):
             plain[name] = None if plain[name] is None else str(plain[name])
         plain["arena"] = None if self.arena is None else list(self.arena)
+        plain["faults"] = [event.values() for event in self.faults]
         return plain
 
     @classmethod
@@ -139,7 +149,8 @@ NULLABLE = {field.name for field in dataclasses.fields(RunConfig) if field.defau
 KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
          "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,
          "max_steps": int, "start": Path, "fit": str, "speed_variation": float,
-         "sense_radius": float, "distance_noise": float, "msg_loss": float}  # fmt: skip
+         "sense_radius": float, "distance_noise": float, "msg_loss": float, "faults": list,
+         "failure_rate": float}  # fmt: skip
 """The kind of value each `RunConfig` field takes (None is allowed where the default is None)."""
 
 
@@ -156,6 +167,8 @@ def _typed(value: Any, kind: type, where: str) -> Any:
         if pair and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
             return (value[0], value[1])
         raise InputError(f"{where} must be two whole numbers [width, height], got {value!r}")
+    if kind is list:
+        return events_from_values(value, where)
     if kind is float and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     if isinstance(value, kind) and (kind is bool or not isinstance(value, bool)):
@@ -241,12 +254,22 @@ def start_cells(config: RunConfig, world: World) -> np.ndarray | None:
     return read_start_cells(Path(config.start), world)
 
 
-def start_swarm(config: RunConfig, world: World, start: np.ndarray | None = None) -> Swarm:
-    """A swarm on a given world (a painted one, say), run as `config` says."""
-    strategy = strategies.create(config.strategy, order=config.order, senses=config.senses())
+def start_swarm(
+    config: RunConfig,
+    world: World,
+    start: np.ndarray | None = None,
+    plugin: Strategy | Program | None = None,
+) -> Swarm:
+    """A swarm on a given world (a painted one, say), run as `config` says, by `plugin` if
+    given (a plug-in object made elsewhere: the learning environment's relay of a trainer's
+    actions) instead of a new `config.strategy`."""
+    strategy = plugin or strategies.create(
+        config.strategy, order=config.order, senses=config.senses()
+    )
     limits = Limits(config.max_speed, config.max_accel)
     params = Params(limits=limits, speed_variation=config.speed_variation)
-    return Swarm(world, strategy, config.seeded().seed, params, start)
+    faults = Faults(config.faults, config.failure_rate)
+    return Swarm(world, strategy, config.seeded().seed, params, start, faults)
 
 
 def save(swarm: Swarm, path: Path, config: RunConfig) -> None:
@@ -311,7 +334,11 @@ class Runner:
 
     @property
     def finished(self) -> bool:
-        return self.swarm.complete or self.out_of_steps or self.swarm.driver.quiet
+        """Formed (or a local program gone quiet, or no robot left that can move) with no fault
+        still to come, or out of steps."""
+        swarm = self.swarm
+        settled = swarm.complete or swarm.driver.quiet or swarm.stranded
+        return (settled and not swarm.faults.ahead(swarm.step_count)) or self.out_of_steps
 
     def step(self) -> None:
         self.swarm.step()

@@ -218,6 +218,22 @@ def summary_line(metrics: dict[str, Any]) -> str:
         f"{_count(metrics['targets'], 'target')}, scale {metrics['scale']:.2f}: {formed}, "
         f"coverage {100 * metrics['coverage']:.1f}%, iou {metrics['iou']:.3f}, "
         f"{_count(metrics['overlaps'], 'overlap')}, seed {metrics['seed']}{versus}"
+        f"{_fault_summary(metrics)}"
+    )
+
+
+def _fault_summary(metrics: dict[str, Any]) -> str:
+    """What faults did, if there were any: robots lost and stalled, and the recoveries."""
+    faults = metrics["faults"]
+    if not faults:
+        return ""
+    recovered = [f["recovery_steps"] for f in faults if f["recovery_steps"] is not None]
+    slowest = f", the slowest in {_count(max(recovered), 'step')}" if recovered else ""
+    stalls = metrics["cells_lost_to_stalls"]
+    lost = f" ({_count(stalls, 'cell')} lost to stalled robots)" if stalls else ""
+    return (
+        f"; {_count(len(faults), 'fault')}: {metrics['robots_lost']:,} robots lost, "
+        f"{metrics['robots_stalled']:,} stalled{lost}, {len(recovered)} recovered{slowest}"
     )
 
 

@@ -111,6 +111,25 @@ def test_a_lost_link_is_lost_both_ways():
     assert (_link_up(a, b, 7, 0.3) == _link_up(b, a, 7, 0.3)).all()
 
 
+def test_a_removed_robot_is_gone_from_perception_and_a_stalled_one_is_silent_and_still():
+    world = world_of(np.ones((1, 3), dtype=bool), 4, arena=(14, 6))
+    start = np.array([[6, 4], [7, 4], [8, 4], [9, 4]])
+    swarm = Swarm(world, East(), seed=1, start=start)
+    swarm.fail(np.array([1]), "remove")
+    swarm.fail(np.array([2]), "stall")
+    sense = swarm.driver.perceive()
+    row = slice(sense.start[0], sense.start[1])
+    robots = ~sense.seed[row]
+    offsets, heard = sense.offset[row][robots].tolist(), sense.heard[row][robots]
+    sensed = {tuple(o): h for o, h in zip(offsets, heard, strict=True)}
+    assert sensed == {(2.0, 0.0): False, (3.0, 0.0): True}  # 1 is gone, 2 is there but silent
+    assert sense.start[2] == sense.start[1]  # the removed robot senses nothing
+    assert not sense.ready[[1, 2]].any()
+    run(swarm, max_steps=60)
+    assert swarm.overlap_total == 0
+    assert swarm.cell[:, 0].tolist() == [7, 7, 8, 13]  # 0 stops behind the stalled robot
+
+
 WALL_FREE_STEPS = 60
 """Steps in which no robot can reach the arena's walls (at most half a cell a step, and 32 cells
 of room): walls do not move with the scenario."""

@@ -102,3 +102,18 @@ def test_plots_are_not_overwritten_without_force(tiny, tmp_path, capsys):
     assert "add --force" in capsys.readouterr().err
     assert (plots / "steps.png").stat().st_mtime_ns == before
     assert main(["plot", str(tmp_path / "tiny.csv"), "--out", str(plots), "--force"]) == 0
+
+
+def test_a_sweep_varies_faults_and_reports_the_slowest_recovery(tmp_path):
+    path = tmp_path / "faults.toml"
+    path.write_text(
+        f'shapes = ["{SHAPES / "line.png"}"]\nstrategies = ["optimal"]\nagents = 20\n'
+        'fail = ["0.2@40", "3@40"]\nstall = "1@20"\nfailure_rate = [0, 0.001]\nseeds = 1\n'
+    )
+    runs = read_sweep(path)
+    assert len(runs) == 4
+    assert sweep(runs, tmp_path / "faults.csv", path.parent, workers=1) == 4
+    rows = read_rows(tmp_path / "faults.csv")
+    assert {row["config.fail"] for row in rows} == {"0.2@40", "3@40"}
+    assert all(int(row["robots_lost"]) >= 3 and row["overlaps"] == "0" for row in rows)
+    assert all(row["recovery_steps"] != "" for row in rows)

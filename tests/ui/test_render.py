@@ -1,9 +1,26 @@
 from __future__ import annotations
 
+from typing import ClassVar
+
+import numpy as np
 import pygame
 
+from swarmshape.core.local import Program, Slot
+from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.states import State
-from swarmshape.ui.render import FLOOR, SEED_GREEN, TARGET, Renderer
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.ui.render import (
+    ERROR_RED,
+    FLOOR,
+    PALETTE,
+    SEED_GREEN,
+    TARGET,
+    TEXT_DARK,
+    Renderer,
+    legend,
+    program_of,
+)
 from tests.conftest import grid_from, make_swarm
 
 SHAPE = grid_from("""
@@ -42,3 +59,81 @@ def test_the_world_scales_to_fit_any_area():
         assert cell * width <= size[0] and cell * height <= size[1]
         assert (cell + 1) * width > size[0] or (cell + 1) * height > size[1]
         assert ox >= 0 and oy >= 0
+
+
+class Shown(Program):
+    """Robots stay put, take state ``number % 3``, keep their number as a gradient to show, and
+    believe they are all on the shape's first cell."""
+
+    name = "shown"
+    description = "test: states, a shown slot and an estimate"
+    message_size = 1
+    memory: ClassVar[dict[str, Slot]] = {"state": Slot(np.int64), "hops": Slot(np.int64, 999)}
+    states = ("first", "second", "third")
+    shown = "hops"
+
+    def act(self, sense, memory, rng):
+        memory.state = sense.number % 3
+        memory.hops = sense.number
+        return np.zeros(len(sense), dtype=np.int64), memory.hops[:, None].copy()
+
+    def estimate(self, memory):
+        return np.ones(len(memory), dtype=bool), np.zeros((len(memory), 2), dtype=np.int64)
+
+
+def local_swarm() -> Swarm:
+    """Three robots two cells apart in a row, below a 1 x 3 shape whose first cell is (2, 2)."""
+    world = build_world(
+        [GroupSpec("g", Shape(np.ones((1, 3), dtype=bool)), (200, 60, 60), 3, Pose(2, 2))],
+        (12, 8),
+    )
+    swarm = Swarm(world, Shown(), seed=1, start=np.array([[2, 5], [4, 5], [6, 5]]))
+    swarm.step()
+    return swarm
+
+
+def drawn(swarm: Swarm, overlays=()) -> tuple[pygame.Surface, Renderer]:
+    surface = pygame.Surface((480, 320))
+    renderer = Renderer(swarm.world)
+    renderer.draw(surface, swarm, None, overlays)
+    return surface, renderer
+
+
+def test_a_local_program_with_states_colours_its_robots_by_state():
+    swarm = local_swarm()
+    surface, renderer = drawn(swarm)
+    assert program_of(swarm).name == "shown" and program_of(make_swarm(SHAPE)) is None
+    assert [name for name, _ in legend(swarm)] == ["first", "second", "third"]
+    for robot in range(3):
+        rect = renderer.cell_rect(tuple(swarm.cell[robot]), surface.get_rect())
+        assert surface.get_at(rect.move(3, 3).topleft)[:3] == PALETTE[robot % 3]
+
+
+def test_overlays_draw_values_links_and_localisation_error_only_when_asked():
+    swarm = local_swarm()
+    plain, renderer = drawn(swarm)
+    area = plain.get_rect()
+    robot = renderer.cell_rect(tuple(swarm.cell[1]), area)  # its value is 1
+    between = renderer.cell_rect((3, 5), area).center  # floor between robots 0 and 1
+
+    def dark_pixels(surface: pygame.Surface) -> int:
+        pixels = pygame.surfarray.array3d(surface.subsurface(robot))
+        return int((np.abs(pixels - np.array(TEXT_DARK)).sum(axis=2) < 60).sum())
+
+    values, _ = drawn(swarm, {"values"})
+    assert dark_pixels(plain) == 0 and dark_pixels(values) > 5
+    links, _ = drawn(swarm, {"links"})
+    assert plain.get_at(between)[:3] == FLOOR
+    red, green, blue = links.get_at(between)[:3]
+    assert blue > red and (red, green, blue) != FLOOR, "a link crosses the gap"
+    error, _ = drawn(swarm, {"error"})
+    believed = renderer.cell_rect((2, 2), area).center  # the shape's first cell
+    assert error.get_at(believed)[:3] == ERROR_RED
+    assert plain.get_at(believed)[:3] != ERROR_RED
+
+
+def test_overlays_ask_nothing_of_a_central_strategy():
+    swarm = make_swarm(SHAPE, seed=1)
+    plain, _ = drawn(swarm)
+    everything, _ = drawn(swarm, {"values", "links", "error"})
+    assert pygame.image.tobytes(plain, "RGB") == pygame.image.tobytes(everything, "RGB")

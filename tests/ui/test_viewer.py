@@ -2,13 +2,16 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
 import pygame
 import pytest
 
+from swarmshape.core.states import LOST
 from swarmshape.core.swarm import Swarm
 from swarmshape.strategies import create
 from swarmshape.ui.viewer import SPEEDS, Viewer
 from tests.conftest import grid_from, make_swarm, world_of
+from tests.ui.test_render import Shown
 
 SHAPE = grid_from("""
 ####
@@ -163,3 +166,82 @@ def test_no_step_runs_after_the_user_quit(viewer):
     before = viewer.swarm.step_count
     press(viewer, pygame.K_q)
     assert not viewer.running and viewer.swarm.step_count == before
+
+
+def click(view: Viewer, kind: int, pixel: tuple[int, int]) -> None:
+    if kind == pygame.MOUSEMOTION:
+        event = pygame.event.Event(kind, pos=pixel, rel=(0, 0), buttons=(1, 0, 0))
+    else:
+        event = pygame.event.Event(kind, pos=pixel, button=1)
+    pygame.event.post(event)
+    view.tick()
+
+
+def test_the_fault_tool_removes_a_clicked_robot_and_a_dragged_rectangle(tmp_path):
+    block = grid_from("""
+    ########
+    ########
+    ########
+    ########
+    """)
+    view = Viewer(
+        lambda world: Swarm(world, create("optimal"), 3),
+        world_of(block, 40),
+        title="block.png",
+        size=(640, 400),
+        fps=0,
+        screenshots=tmp_path,
+    )
+    try:
+        while not view.swarm.complete:
+            view.tick()
+        press(view, pygame.K_SPACE)
+        press(view, pygame.K_x)
+        assert view.fault_tool and "FAULT TOOL" in view.status()
+        area = view._world_area()
+        target = tuple(view.swarm.world.targets[0].tolist())
+        pixel = view.renderer.cell_rect(target, area).center
+        robot = int(np.flatnonzero((view.swarm.cell == target).all(axis=1))[0])
+        click(view, pygame.MOUSEBUTTONDOWN, pixel)
+        click(view, pygame.MOUSEBUTTONUP, pixel)
+        assert view.swarm.state[robot] == LOST and view.notice == "removed 1 robot"
+        corner = view.swarm.world.targets.min(axis=0) + np.array([3, 1])
+        far = corner + np.array([2, 1])
+        click(view, pygame.MOUSEBUTTONDOWN, view.renderer.cell_rect(tuple(corner), area).center)
+        click(view, pygame.MOUSEMOTION, view.renderer.cell_rect(tuple(far), area).center)
+        assert view._drag_from is not None
+        click(view, pygame.MOUSEBUTTONUP, view.renderer.cell_rect(tuple(far), area).center)
+        assert view.notice == "removed 6 robots" and view.swarm.faults.lost == 7
+        assert [f["kind"] for f in view.swarm.faults.log] == ["window", "window"]
+        shot = view.screenshot()  # the red marks where they were
+        image = pygame.surfarray.array3d(pygame.image.load(shot))
+        assert ((image == (214, 40, 40)).all(axis=2)).sum() > 20
+        press(view, pygame.K_x)
+        press(view, pygame.K_SPACE)
+        while not view.swarm.complete:
+            view.tick()
+        assert view.swarm.overlap_total == 0 and view.swarm.filled.all()
+    finally:
+        pygame.quit()
+
+
+def test_g_l_o_toggle_a_local_programs_overlays_and_say_so(viewer, tmp_path):
+    press(viewer, pygame.K_g)  # the fixture runs the central `paper` strategy
+    assert viewer.overlays == set() and "no local program" in viewer.notice
+    view = Viewer(
+        lambda world: Swarm(world, Shown(), 3),
+        world_of(SHAPE),
+        title="bar.png",
+        size=(640, 400),
+        fps=0,
+        screenshots=tmp_path,
+    )
+    try:
+        for key in (pygame.K_g, pygame.K_l, pygame.K_o):
+            press(view, key)
+        assert view.overlays == {"values", "links", "error"}
+        assert "showing error links values" in view.status()
+        press(view, pygame.K_l)
+        assert view.overlays == {"values", "error"} and view.notice == "links overlay off"
+    finally:
+        pygame.quit()

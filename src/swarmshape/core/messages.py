@@ -53,6 +53,11 @@ class MessageQueue:
         kept = [replace(m, target=int(new_index[m.target])) for m in self._pending]
         self._pending = deque(m for m in kept if m.target >= 0)
 
+    def drop(self, recipients: np.ndarray) -> None:
+        """Forget pending messages to `recipients` (robots a fault took); the log keeps them."""
+        gone = set(np.asarray(recipients).tolist())
+        self._pending = deque(m for m in self._pending if m.recipient not in gone)
+
     def deliver(self) -> list[Message]:
         """Hand over everything sent so far."""
         delivered = list(self._pending)

@@ -18,6 +18,14 @@
   ("exact") or only a proved lower bound ("hall", "hall+cut", "dual", "dual+ascent": see
   `bounds.Bound`). Each is computed within an estimated `BOUND_SECONDS`, so the result depends
   on the run only.
+- ``robots_lost``: robots a fault removed; ``robots_stalled``: robots stopped for good where
+  they stand; ``cells_lost_to_stalls``: targets a stalled robot holds or cuts off, which no
+  robot can fill (they count against ``coverage``; a run ends when every other target is filled).
+- ``faults``: one entry per fault event (`swarmshape.core.faults.LOG_KEYS`): its ``step``,
+  ``kind``, ``robots``, ``coverage_before`` and ``coverage_after`` it, ``recovered_at`` (the
+  step every target the survivors can reach was filled again, or None) and ``recovery_steps``,
+  and the ``scale`` after it (below the one before when the survivors were too few).
+- ``scale``: the final scale (smaller than at the start when a fault left too few robots).
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from swarmshape.core.bounds import Bound, bottleneck_bound, distance_bound, travel_steps
+from swarmshape.core.states import STALLED
 from swarmshape.core.swarm import Swarm
 
 DIGITS = 6
@@ -51,7 +60,7 @@ def iou(swarm: Swarm, group: int | None = None) -> float:
 
 
 def _iou_of(swarm: Swarm, group: int) -> float:
-    occupied = np.floor(swarm.positions()[swarm.group == group]).astype(int)
+    occupied = np.floor(swarm.positions()[(swarm.group == group) & swarm.present]).astype(int)
     return _iou(swarm.world.groups[group].targets, occupied)
 
 
@@ -140,6 +149,10 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
         "messages": swarm.driver.messages_sent,
         **LOCAL_FIGURES,
         **swarm.driver.figures(),
+        "robots_lost": swarm.faults.lost,
+        "robots_stalled": int((swarm.state == STALLED).sum()),
+        "cells_lost_to_stalls": int(swarm.dead.sum()),
+        "faults": [dict(entry) for entry in swarm.faults.log],
         **_totals_against_bounds(groups, steps),
         "groups": groups,
     }

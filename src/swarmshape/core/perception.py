@@ -62,23 +62,47 @@ class Blueprint:
     @classmethod
     def of(cls, frame_cells: list[np.ndarray]) -> Blueprint:
         boxes = []
-        for cells in frame_cells:
-            low = cells.min(axis=0) if len(cells) else np.zeros(2, dtype=np.int64)
-            high = cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)
-            grid = np.zeros(high - low, dtype=bool)
-            grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+        for cells in frame_cells:  # each box with a border of -1, where lookups off it land
+            low = (cells.min(axis=0) if len(cells) else np.zeros(2, dtype=np.int64)) - 1
+            high = (cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)) + 1
+            grid = np.full(high - low, -1, dtype=np.int64)
+            grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = np.arange(len(cells))
             boxes.append((low, grid))
         return cls(tuple(frame_cells), _boxes=tuple(boxes))
 
+    def count(self, groups: np.ndarray) -> np.ndarray:
+        """How many cells the shape of each entry's group has."""
+        return np.array([len(c) for c in self.cells], dtype=np.int64)[groups]
+
+    def number(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        """The number of each frame cell ``(k, 2)`` in its group's shape, or -1 (not in it)."""
+        return box_lookup(self._boxes, groups, frame)
+
     def contains(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
         """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
-        found = np.zeros(len(frame), dtype=bool)
-        for group, (low, grid) in enumerate(self._boxes):
-            mine = np.flatnonzero(groups == group)
-            local = frame[mine] - low
-            fits = ((local >= 0) & (local < grid.shape)).all(axis=1)
-            found[mine[fits]] = grid[local[fits, 0], local[fits, 1]]
-        return found
+        return self.number(groups, frame) >= 0
+
+    def cell(self, groups: np.ndarray, numbers: np.ndarray) -> np.ndarray:
+        """The frame cell numbered `numbers` (row-major) in each entry's group's shape."""
+        out = np.zeros((len(groups), 2), dtype=np.int64)
+        for group, cells in enumerate(self.cells):
+            mine = groups == group
+            out[mine] = cells[numbers[mine]]
+        return out
+
+
+def box_lookup(
+    boxes: tuple[tuple[np.ndarray, np.ndarray], ...], groups: np.ndarray, frame: np.ndarray
+) -> np.ndarray:
+    """Per frame cell ``(k, 2)``, the value in its group's grid: `boxes` holds per group the
+    frame cell of the grid's corner and the grid, whose one-cell border holds the value for
+    any cell off it (a lookup off the grid is clipped onto the border)."""
+    found = np.zeros(len(frame), dtype=boxes[0][1].dtype if boxes else np.int64)
+    for group, (low, grid) in enumerate(boxes):
+        mine = np.flatnonzero(groups == group) if len(boxes) > 1 else slice(None)
+        local = np.clip(frame[mine] - low, 0, np.array(grid.shape) - 1)
+        found[mine] = grid[local[:, 0], local[:, 1]]
+    return found
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,7 +147,7 @@ def quarter_turns(poses: list[Pose]) -> np.ndarray:
 def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
     """Rotate integer or float vectors ``(k, 2)`` by per-row quarter turns, clockwise on screen."""
     out = np.array(vectors, dtype=np.result_type(vectors, np.int64), copy=True)
-    if not np.any(turns):
+    if not turns.any():  # the usual case: every seed frame has the world's axes
         return out
     for _ in range(3):
         rows = turns > 0
@@ -133,23 +157,27 @@ def turn(vectors: np.ndarray, turns: np.ndarray) -> np.ndarray:
 
 
 def neighbours(
-    cell: np.ndarray, seeds: np.ndarray, size: tuple[int, int], reach: np.ndarray
+    cell: np.ndarray,
+    seeds: np.ndarray,
+    size: tuple[int, int],
+    reach: np.ndarray,
+    present: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(start, owner, other)``: for every robot, the robots and seeds (``n + seed index``)
-    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. One grid
-    lookup per offset, never a loop over robots."""
+    whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. Robots not
+    `present` (removed by a fault) neither sense nor are sensed. One gather of every robot's
+    every offset from a padded grid of who is where, never a loop over robots."""
     n = len(cell)
+    here = np.arange(n) if present is None else np.flatnonzero(present)
     r = int(np.abs(reach).max()) if len(reach) else 0
     who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
-    who[cell[:, 0] + r, cell[:, 1] + r] = np.arange(n)
+    who[cell[here, 0] + r, cell[here, 1] + r] = here
     who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
-    k, columns = len(reach), who.shape[1]
-    if k == 0 or n == 0:
-        empty = np.zeros(0, dtype=np.int64)
-        return np.zeros(n + 1, dtype=np.int64), empty, empty
-    here = (cell[:, 0] + r) * columns + (cell[:, 1] + r)
-    found = who.ravel()[here[:, None] + (reach[:, 0] * columns + reach[:, 1])[None, :]]
-    hit = np.flatnonzero(found.ravel() >= 0)  # row-major: by robot, then in `reach` order
-    owner, other = hit // k, found.ravel()[hit]
-    start = np.concatenate([[0], np.cumsum((found >= 0).sum(axis=1))])
+    stride = who.shape[1]
+    base = (cell[here, 0] + r) * stride + (cell[here, 1] + r)
+    found = who.ravel()[base[:, None] + (reach[:, 0] * stride + reach[:, 1])[None, :]]
+    hit = np.flatnonzero(found >= 0)  # row-major: by robot, then in reach order
+    owner = here[hit // max(1, len(reach))]
+    other = found.ravel()[hit]
+    start = np.searchsorted(owner, np.arange(n + 1))
     return start, owner, other

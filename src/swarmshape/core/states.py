@@ -14,7 +14,11 @@ class State(IntEnum):
     """On its target, for good unless a mover swaps with it."""
     WANDERING = 3
     """A spare robot walking at random outside the shape."""
+    STALLED = 4
+    """Failed where it stands (a dead motor): holds its cell for good, an obstacle to others."""
+    LOST = 5
+    """Removed by a fault: off the lattice, no longer part of the run (its index stays)."""
 
 
-WAITING, MOVING, SETTLED, WANDERING = (int(state) for state in State)
+WAITING, MOVING, SETTLED, WANDERING, STALLED, LOST = (int(state) for state in State)
 """Plain ints for the hot loop: an IntEnum member lookup costs a microsecond each time."""

@@ -23,7 +23,7 @@ from swarmshape.core.messages import MessageQueue
 from swarmshape.core.motion import STEPS, Motion
 from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
 from swarmshape.core.snapshot import Snapshot, decode_attributes, encode_attributes, prefixed
-from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
+from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING
 from swarmshape.core.tswap import rotate_rings, settled_swaps, shortening_swaps
 
 if TYPE_CHECKING:
@@ -57,6 +57,12 @@ class Strategy:
 
     def on_reshape(self, swarm: SwarmView, group: int) -> None:
         """The group's shape changed while running. Default: idle robots take the open cells."""
+        swarm.recruit(group)
+
+    def on_fault(self, swarm: SwarmView, group: int, robots: np.ndarray) -> None:
+        """A fault took `robots` of `group` (removed, or stalled for good): their cells are
+        open again. Default: idle robots take the open cells, as after a reshape. (A group
+        left too short of robots is re-formed smaller afterwards, through `on_reshape`.)"""
         swarm.recruit(group)
 
     def drive(self, swarm: Swarm) -> Steering:
@@ -235,6 +241,14 @@ class Steering:
         self.queue.send(self.swarm.step_count, sender, recipient, target)
 
     def assign(self, robots: np.ndarray, targets: np.ndarray) -> None:
+        """Robots a fault took are skipped; a settled robot sent on leaves its target open."""
+        state = self.swarm.state[robots]
+        if ((state == LOST) | (state == STALLED)).any():
+            working = (state != LOST) & (state != STALLED)
+            robots, targets = robots[working], np.broadcast_to(targets, robots.shape)[working]
+            state = state[working]
+        moving_on = robots[(state == SETTLED) & (self.target[robots] >= 0)]
+        self.swarm.filled[self.target[moving_on]] = False
         self.swarm.state[robots] = MOVING
         self.target[robots] = targets
         self.blocked[robots] = 0
@@ -261,6 +275,7 @@ class Steering:
     def open_targets(self, group: int) -> np.ndarray:
         taken = np.zeros(len(self.swarm.filled), dtype=bool)
         taken[self.target[self.target >= 0]] = True
+        taken |= self.swarm.dead
         return np.flatnonzero((self.swarm.world.target_group == group) & ~taken)
 
     def recruit(self, group: int, match: Matcher = greedy) -> None:
@@ -328,6 +343,26 @@ class Steering:
         self.target[has_target] = renumber[self.target[has_target]]
         self.release(np.flatnonzero(has_target & (self.target < 0)))
         self.swarm.filled[self.target[self.swarm.state == SETTLED]] = True
+
+    def removed(self, robots: np.ndarray, stalled: bool) -> None:
+        """A fault took `robots`: forget their targets, paths and messages; robots heading for a
+        target that a stall made unreachable wait again; the strategy refills each group."""
+        swarm = self.swarm
+        self.target[robots] = -1
+        self.blocked[robots] = 0
+        self.routed[robots] = False
+        self.recruited[robots] = False
+        self.planner.forget(robots)
+        self.queue.drop(robots)
+        heading = np.flatnonzero(self.target >= 0)
+        doomed = heading[swarm.dead[self.target[heading]]]
+        swarm.state[doomed] = WAITING
+        self.target[doomed] = -1
+        self.planner.forget(doomed)
+        if stalled:  # everyone plans afresh around the new obstacles
+            self.planner.forget(np.arange(len(self.target)))
+        for group in np.unique(swarm.group[robots]).tolist():
+            self.strategy.on_fault(self.view, group, robots[swarm.group[robots] == group])
 
     def hand_out(self, group: int) -> None:
         """After a reshape: everyone plans afresh, and the strategy hands out the open cells."""
@@ -429,7 +464,8 @@ class Steering:
         self.planner.forget(np.concatenate([a, b]))
         swap = settled & same_group
         self._swap_with_settled(*settled_swaps(blocked[swap], robot[swap]))
-        fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group)
+        stalled = is_robot & (state == STALLED)
+        fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group) | stalled
         self.routed[blocked[fixed]] = True
         return blocker[idle]
 
@@ -505,10 +541,11 @@ class Steering:
         robot = np.maximum(holder, 0)
         settled = robot_here & (swarm.state[robot] == SETTLED)
         resting = robot_here & (swarm.state[robot] != MOVING)
+        stalled = robot_here & (swarm.state[robot] == STALLED)
         width, height = swarm.world.size
         owner = swarm.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
         for group in np.unique(swarm.group[needing]).tolist():
-            fixed = (holder == SEED) | ((owner >= 0) & (owner != group))
+            fixed = (holder == SEED) | ((owner >= 0) & (owner != group)) | stalled
             if self.motion is Motion.ROUTE:
                 views = [~fixed & ~robot_here, ~fixed & ~resting, ~fixed & ~settled]
             for agent in [a for a in needing if swarm.group[a] == group]:

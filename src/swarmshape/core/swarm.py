@@ -13,12 +13,14 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+from scipy import ndimage
 
 from swarmshape.core.audit import overlaps
+from swarmshape.core.faults import Faults
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, TOUCH, Limits, positions, resolve_claims, step_sizes
 from swarmshape.core.snapshot import Snapshot, prefixed
-from swarmshape.core.states import WAITING, State
+from swarmshape.core.states import LOST, SETTLED, STALLED, WAITING, State
 from swarmshape.core.world import World, WorldError
 from swarmshape.errors import InputError
 
@@ -73,6 +75,14 @@ class Driver(Protocol):
     def reshaped(self, renumber: np.ndarray) -> None:
         """The targets were renumbered after a shape change (-1: gone); mark `Swarm.filled`."""
 
+    def removed(self, robots: np.ndarray, stalled: bool) -> None:
+        """A fault struck `robots`: they no longer act. Without `stalled` they are gone (state
+        `LOST`, off the lattice); with it they stand where they are for good (state `STALLED`),
+        obstacles to go around. The swarm has already unmarked the targets they had filled and
+        the ones a stall made unreachable (`Swarm.dead`). Forget whatever the driver kept for
+        them (targets, paths, messages to them) and send others to the open cells. The swarm
+        calls it before it re-forms a group too short of robots at a smaller scale."""
+
     def hand_out(self, group: int) -> None:
         """After a shape change: send robots to the group's open cells."""
 
@@ -116,6 +126,7 @@ class Swarm:
         seed: int,
         params: Params | None = None,
         start: np.ndarray | None = None,
+        faults: Faults | None = None,
     ) -> None:
         self._take(world, plugin, seed, params or Params())
         n = world.agents
@@ -149,6 +160,11 @@ class Swarm:
         self.overlaps = np.zeros(len(world.groups), dtype=np.int64)
         """Overlapping pairs summed over steps, per group (a pair counts for both its groups)."""
         self.completed_at: list[int | None] = [None] * len(world.groups)
+        self.faults = faults or Faults()
+        self.faults.lost_at = np.full(n, -1, dtype=np.int64)
+        self.dead = np.zeros(len(world.targets), dtype=bool)
+        """Targets no robot can fill: held by a stalled robot, or cut off by stalled robots
+        from every robot of their group that can still move (lost coverage)."""
         self.driver = plugin.drive(self)
         self._index_world()
         self.driver.start()
@@ -183,6 +199,7 @@ class Swarm:
             "queued": self.lattice.queued,
         }
         values |= prefixed("world", self.world.snapshot())
+        values |= prefixed("faults", self.faults.snapshot()) | {"dead": self.dead}
         return values | prefixed("driver", self.driver.snapshot())
 
     @classmethod
@@ -210,8 +227,10 @@ class Swarm:
         if not all(step is None or type(step) is int for step in completed):
             raise saved.error("completed_at", "holds something other than steps")
         swarm.completed_at = completed
+        swarm.faults = Faults.restored(saved.part("faults"), world.agents)
         swarm.driver = plugin.drive(swarm)
         swarm._index_world()
+        swarm.dead = saved.array("dead", bool, (len(world.targets),))
         swarm.driver.restore(saved.part("driver"))
         return swarm
 
@@ -234,7 +253,9 @@ class Swarm:
         holder = saved.array("holder", np.int64, self.lattice.holder.shape, WALL, n - 1)
         queued = saved.array("queued", np.int64, self.lattice.queued.shape, FREE, n - 1)
         held = np.concatenate([self.cell + STEPS[self.direction] * k for k in (0, 1, 2)])
-        reserved = np.concatenate([np.ones(n, bool), self.ahead >= 1, self.ahead >= 2])
+        present = self.state != LOST
+        reserved = np.concatenate([present, self.ahead >= 1, self.ahead >= 2])
+        reserved &= np.tile(present, 3)
         if (held[reserved] >= self.world.size).any() or (held[reserved] < 0).any():
             raise saved.error("cell", "puts a robot or its reservation outside the arena")
         keys, who = self.lattice.key(held[reserved]), np.tile(np.arange(n), 3)[reserved]
@@ -266,16 +287,33 @@ class Swarm:
         world = self.world
         self.lattice.grid[world.seeds[:, 0], world.seeds[:, 1]] = SEED
         self.lattice.mark_targets(world.targets, world.target_group)
-        self._targets_per_group = np.bincount(world.target_group, minlength=len(world.groups))
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
+        self._target_at = np.full(world.size, -1, dtype=np.int64)
+        self._target_at[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
+        self.dead = self._find_dead()
         self.driver.index_world()
 
     # --- reading the run ------------------------------------------------------------------------
 
     @property
     def complete(self) -> bool:
-        return bool(self.filled.all())
+        """Every group's shape is whole (see `_whole`)."""
+        return all(self._whole(g) for g in range(len(self.world.groups)))
+
+    @property
+    def stranded(self) -> bool:
+        """A shape is not whole and nothing can change any more: every group's shape is whole,
+        or faults left the group no robot that can move or is still under way."""
+        able = ((self.state != LOST) & (self.state != STALLED)) | (self.ahead > 0)
+        groups = range(len(self.world.groups))
+        done = [self._whole(g) or not able[self.group == g].any() for g in groups]
+        return all(done) and not all(self._whole(g) for g in groups)
+
+    @property
+    def present(self) -> np.ndarray:
+        """Robots still in the run (not removed by a fault)."""
+        return self.state != LOST
 
     def positions(self) -> np.ndarray:
         """Robot square centres ``(n, 2)`` in world units."""
@@ -288,12 +326,17 @@ class Swarm:
     # --- one step -------------------------------------------------------------------------------
 
     def step(self) -> None:
+        if self.faults.scheduled:
+            self._strike()
         self.driver.decide()
         self._move()
         self.driver.arrived()
         self.step_count += 1
+        if self.dead.any() and (self.ahead[self.state == STALLED] > 0).any():
+            self.dead = self._find_dead()  # a stalled robot coasted into its last cell
         self._audit()
         self._note_completion()
+        self.faults.note(self.step_count, self.complete)
 
     def claim(self, robots: np.ndarray, directions: np.ndarray, origins: np.ndarray) -> np.ndarray:
         """Each robot asks for the cell one step in `direction` from the key `origin` (its own
@@ -385,10 +428,12 @@ class Swarm:
     def _audit(self) -> None:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""
         world = self.world
-        i, j = overlaps(self.cell, self.direction, self.offset, world.seeds, world.size)
+        here = np.flatnonzero(self.state != LOST) if self.faults.log else slice(None)
+        cell, direction, offset = self.cell[here], self.direction[here], self.offset[here]
+        i, j = overlaps(cell, direction, offset, world.seeds, world.size)
         if len(i) == 0:
             return
-        owner = np.concatenate([self.group, self._seed_group])
+        owner = np.concatenate([self.group[here], self._seed_group])
         self.overlap_total += len(i)
         np.add.at(self.overlaps, owner[i], 1)
         cross = owner[i] != owner[j]
@@ -398,9 +443,8 @@ class Swarm:
         """Note the step at which each group's targets were all filled, and tell the driver."""
         if None not in self.completed_at:
             return
-        filled = np.bincount(self.world.target_group[self.filled], minlength=len(self.world.groups))
-        for g in np.flatnonzero(filled == self._targets_per_group).tolist():
-            if self.completed_at[g] is None:
+        for g, at in enumerate(self.completed_at):
+            if at is None and self._whole(g):
                 self.completed_at[g] = self.step_count
                 self.driver.completed(g)
 
@@ -424,6 +468,116 @@ class Swarm:
         self._index_world()
         self.completed_at[group] = None
         self.driver.hand_out(group)
+
+    # --- faults ---------------------------------------------------------------------------------
+
+    def _strike(self) -> None:
+        """What the fault schedule holds for this step, then the failure rate."""
+        for event in self.faults.due(self.step_count):
+            self.fail(event.robots(self.state, self.cell, self.rng), event.kind)
+        hits = self.faults.rate_hits(self.state, self.rng)
+        if len(hits):
+            self.fail(hits, "remove", label="rate")
+
+    def fail(self, robots: np.ndarray, kind: str = "remove", label: str | None = None) -> None:
+        """A fault strikes `robots` now: ``remove`` takes them out of the run, ``stall`` stops
+        them for good where they stand (see `swarmshape.core.faults`). The targets they had
+        filled open up, the driver forgets them and refills the gaps, a group left with fewer
+        robots than cells it can fill is re-formed at the largest scale its survivors can fill,
+        and the fault goes into `faults.log` (under `label`, default `kind`)."""
+        stall = kind == "stall"
+        robots = np.unique(np.asarray(robots, dtype=np.int64))
+        robots = robots[(self.state[robots] != LOST) & ~(stall & (self.state[robots] == STALLED))]
+        before = float(self.filled.mean()) if len(self.filled) else 1.0
+        settled = robots[self.state[robots] == SETTLED]
+        targets = self._target_at[self.cell[settled, 0], self.cell[settled, 1]]
+        self.filled[targets[targets >= 0]] = False
+        if stall:
+            self.state[robots] = STALLED
+        else:
+            self._take_off(robots)
+        self.dead = self._find_dead()
+        self.driver.removed(robots, stall)
+        groups = np.unique(self.group[robots]).tolist()
+        for g in groups:
+            self._rescale_if_short(g)
+        for g in groups:
+            if not self._whole(g):
+                self.completed_at[g] = None
+        self.faults.log.append(
+            {
+                "step": self.step_count,
+                "kind": label or kind,
+                "robots": len(robots),
+                "coverage_before": round(before, 6),
+                "coverage_after": round(float(self.filled.mean()), 6),
+                "recovered_at": None,
+                "recovery_steps": None,
+                "scale": round(min(g.shape.scale for g in self.world.groups), 6),
+            }
+        )
+        self.faults.note(self.step_count, self.complete)
+
+    def _take_off(self, robots: np.ndarray) -> None:
+        """Remove robots from the lattice: the cells they hold go to the robot queued behind
+        them, if any, else become free; cells they were queued for forget them."""
+        ahead = self.ahead[robots]
+        held = [self.cell[robots] + STEPS[self.direction[robots]] * k for k in (0, 1, 2)]
+        keys = self.lattice.key(np.concatenate(held))
+        who = np.tile(robots, 3)
+        mine = np.concatenate([np.ones(len(robots), bool), ahead >= 1, ahead >= 2])
+        keys, who = keys[mine], who[mine]
+        queued = self.lattice.queued[keys] == who
+        self.lattice.queued[keys[queued]] = FREE
+        holds = self.lattice.holder[keys] == who
+        self.leader[self.lattice.leave(keys[holds])] = -1
+        self.state[robots] = LOST
+        self.faults.lost_at[robots] = self.step_count
+        self.leader[robots] = -1
+        self.ahead[robots] = 0
+        self.offset[robots] = 0.0
+        self.speed[robots] = 0.0
+
+    def _rescale_if_short(self, group: int) -> None:
+        """Too few robots left to fill the group's reachable cells: form the same shape at the
+        largest scale the survivors can fill (the paper's answer to too few robots, live)."""
+        mine = self.group == group
+        mobile = int((mine & (self.state != LOST) & (self.state != STALLED)).sum())
+        fillable = int((~self.dead & (self.world.target_group == group)).sum())
+        if mobile >= fillable or mobile < 1:
+            return
+        self.reshape(group, self.world.groups[group].shape.fitted(mobile))
+
+    def _whole(self, group: int) -> bool:
+        """Every target of `group` is filled or lost to stalled robots (see `dead`), and not
+        every one is lost: a shape left with no cell to fill is not formed."""
+        mine = self.world.target_group == group
+        filled, dead = self.filled[mine], self.dead[mine]
+        return bool((filled | dead).all()) and (bool(filled.any()) or not dead.any())
+
+    def _find_dead(self) -> np.ndarray:
+        """Targets held by a stalled robot, or cut off by stalled robots (with the seeds and the
+        other groups' shapes) from every robot of their group that can still move."""
+        world, state = self.world, self.state
+        dead = np.zeros(len(world.targets), dtype=bool)
+        if not (state == STALLED).any():
+            return dead
+        grid = self.lattice.grid
+        robot = np.maximum(grid, 0)
+        stalled = (grid >= 0) & (state[robot] == STALLED)
+        width, height = world.size
+        owner = self.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
+        x, y = world.targets[:, 0], world.targets[:, 1]
+        dead |= stalled[x, y]
+        for g in range(len(world.groups)):
+            mobile = (self.group == g) & (state != LOST) & (state != STALLED)
+            passable = ~stalled & (grid != SEED) & ((owner < 0) | (owner == g))
+            labels, _ = ndimage.label(passable)
+            cells = self.cell[mobile]
+            reached = np.unique(labels[cells[:, 0], cells[:, 1]])
+            mine = world.target_group == g
+            dead[mine] |= ~np.isin(labels[x[mine], y[mine]], reached[reached > 0])
+        return dead
 
 
 def _renumbering(old: np.ndarray, new: np.ndarray, size: tuple[int, int]) -> np.ndarray:

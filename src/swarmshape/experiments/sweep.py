@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmshape.core.faults import parse_event, parse_region
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import START_LAYOUTS
@@ -60,7 +61,13 @@ KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "max_accel": ("a number", lambda v: _number(v)),
     "curve_every": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
     "start": ("packed or scatter", lambda v: v in START_LAYOUTS),
+    "fail": ("AMOUNT@STEP text such as '0.2@300' (robots removed at random)", lambda v: _fault(v)),
+    "stall": ("AMOUNT@STEP text such as '0.1@300' (robots stalled)", lambda v: _fault(v)),
+    "fail_region": ("X,Y,W,H@STEP text such as '4,4,6,6@300'", lambda v: _region(v)),
+    "failure_rate": ("a number from 0 up to (not including) 1", lambda v: _rate(v)),
 }
+FAULT_KEYS = ("fail", "stall", "fail_region")
+"""Sweep keys that each make one fault event of a run (a list of them: one run per value)."""
 """Every key a sweep file may have but `seeds`, with what each of its values must be."""
 INTERRUPTED = 130
 """Exit status after Ctrl+C, as a shell reports it."""
@@ -194,6 +201,37 @@ def _check_runs(path: Path, values: dict[str, list]) -> None:
         raise InputError(f"{path}: {error}") from None
 
 
+def _fault(value: Any) -> bool:
+    try:
+        return isinstance(value, str) and bool(parse_event(value, "remove", "fail"))
+    except InputError:
+        return False
+
+
+def _region(value: Any) -> bool:
+    try:
+        return isinstance(value, str) and bool(parse_region(value))
+    except InputError:
+        return False
+
+
+def _rate(value: Any) -> bool:
+    return _number(value) and 0 <= value < 1
+
+
+def fault_options(config: dict[str, Any]) -> dict[str, Any]:
+    """A sweep row's fault keys as run options: one event per key given."""
+    events = []
+    for key in FAULT_KEYS:
+        if config.get(key) is not None:
+            text = config[key]
+            if key == "fail_region":
+                events.append(parse_region(text))
+            else:
+                events.append(parse_event(text, "stall" if key == "stall" else "remove", key))
+    return {"faults": tuple(events)} if events else {}
+
+
 def _whole(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
@@ -211,12 +249,15 @@ def run_one(config: dict[str, Any], base: Path) -> dict[str, Any]:
     """One headless run (shape paths relative to `base`); its CSV row: config, every metric,
     coverage curve, wall time."""
     started = time.perf_counter()
-    options = {k: v for k, v in config.items() if k not in ("shape", "agents", "curve_every")}
+    skip = ("shape", "agents", "curve_every", *FAULT_KEYS)
+    options = {k: v for k, v in config.items() if k not in skip} | fault_options(config)
     run_config = configure(base / config["shape"], agents=config["agents"] or None, **options)
     curve = CoverageCurve(config.get("curve_every", CURVE_EVERY))
     swarm = run(build(run_config), [curve], run_config.max_steps)
     metrics = run_metrics(swarm)
     scalars = {k: v for k, v in metrics.items() if not isinstance(v, list | dict)}
+    recoveries = [fault["recovery_steps"] for fault in metrics["faults"]]
+    scalars["recovery_steps"] = None if None in recoveries else max(recoveries, default=None)
     return {
         "run": run_key(config),
         **{f"config.{k}": v for k, v in sorted(config.items())},

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmshape.core.metrics import coverage, iou
-from swarmshape.core.states import MOVING, SETTLED, WAITING, WANDERING
+from swarmshape.core.states import MOVING, SETTLED, STALLED, WAITING, WANDERING
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
 from swarmshape.io.files import StreamedFile
@@ -29,6 +29,8 @@ def trace_row(swarm: Swarm) -> dict[str, Any]:
         **{name: int((swarm.state == state).sum()) for name, state in COUNTS.items()},
         "messages": swarm.driver.messages_sent,
         "overlaps": int(swarm.overlap_total),
+        "stalled": int((swarm.state == STALLED).sum()),
+        "lost": swarm.faults.lost,
     }
     for g, placed in enumerate(swarm.world.groups):
         mine = swarm.group == g

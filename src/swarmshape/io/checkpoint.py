@@ -24,7 +24,8 @@ from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write, readable_file
 
 FORMAT = "swarmshape state"
-VERSION = 2
+VERSION = 3
+"""3: runs keep their faults (schedule, log, lost robots); 2 could not hold them."""
 MANIFEST = "manifest"
 MAX_BYTES = 8 * 2**30
 """Largest state, uncompressed: about what a million robots on the largest arena take."""
@@ -64,7 +65,8 @@ def load_state(path: Path) -> dict[str, Any]:
     try:
         with zipfile.ZipFile(path) as archive:
             names = {info.filename: info.file_size for info in archive.infolist()}
-    except (zipfile.BadZipFile, OSError, ValueError):
+    except (zipfile.BadZipFile, OSError, ValueError, NotImplementedError):
+        # zipfile refuses a damaged header's "version needed to extract" with NotImplementedError
         raise InputError(
             f"{path}: not a swarmshape state file (write one with --save-state)"
         ) from None

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from PIL import ImageColor
 
+from swarmshape.core.faults import check_rate, events_from_values
 from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.world import START_LAYOUTS, GroupSpec, World
 from swarmshape.errors import InputError
@@ -38,7 +39,7 @@ PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
 
 TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel",
-            "start"}  # fmt: skip
+            "start", "faults", "failure_rate"}  # fmt: skip
 GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
 POSE_KEYS = {"x", "y", "rotation"}
 
@@ -135,6 +136,12 @@ def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
         raise ScenarioError(
             f"{where.path}: start = {settings['start']!r}; choose {', '.join(START_LAYOUTS)} "
             "(a CSV of start cells is given with --start on the command line)"
+        )
+    if "faults" in settings:
+        settings["faults"] = events_from_values(settings["faults"], f"{where.path}: faults")
+    if "failure_rate" in settings:
+        settings["failure_rate"] = check_rate(
+            settings["failure_rate"], f"{where.path}: failure_rate"
         )
     return settings
 

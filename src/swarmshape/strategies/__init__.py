@@ -109,4 +109,9 @@ def _load_file(path: Path, spec: str) -> ModuleType:
     return module
 
 
-from swarmshape.strategies import concurrent, paper, self_assembly  # noqa: E402,F401  (built-ins)
+from swarmshape.strategies import (  # noqa: E402,F401  (built-ins)
+    concurrent,
+    local_swap,
+    paper,
+    self_assembly,
+)

@@ -67,6 +67,11 @@ class OneShot(Strategy):
         self._planned[swarm.group == group] = -1
         swarm.recruit(group, type(self).match)
 
+    def on_fault(self, swarm: SwarmView, group: int, robots: np.ndarray) -> None:
+        """A fault opened cells: the idle robots (those not yet sent off among them) are matched
+        to the open cells the same way, as after a reshape."""
+        self.on_reshape(swarm, group)
+
 
 @register
 class Optimal(OneShot):

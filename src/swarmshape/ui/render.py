@@ -2,16 +2,26 @@
 
 The world is scaled to whole pixels per cell and centred in the given area. Grey cells are the
 targets, green squares the seeds; agents take their group's colour, brightest while moving,
-slightly darker once settled, pale while waiting or wandering.
+slightly darker once settled, pale while waiting or wandering; stalled robots are charcoal, and
+where a fault removed robots a red cross shows for `LOST_MARK_STEPS` steps.
+
+A local program that names its `states` has its robots coloured by ``memory.state`` instead,
+from `PALETTE` (`legend` lists the pairs). Overlays, each optional, go on top: ``"values"``
+prints the program's `shown` memory slot on each robot, ``"links"`` draws a line for every
+message heard in the last step, ``"error"`` a red line from each localised robot to where it
+believes it is.
 """
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from itertools import pairwise, repeat
 
 import numpy as np
 import pygame
 
+from swarmshape.core.local import LocalControl, Program
+from swarmshape.core.states import STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World
 
@@ -21,14 +31,44 @@ TARGET = (196, 196, 196)
 SEED_GREEN = (34, 160, 60)
 LABEL_BACK = (38, 40, 46)
 LABEL_TEXT = (235, 235, 235)
+LOST_RED = (214, 40, 40)
+STALLED_GREY = (64, 64, 70)
+LOST_MARK_STEPS = 60
+"""Steps for which a removed robot's last cell is marked."""
 LABEL_SHARE = 1 / 22
 """A frame's text line is this share of its height (at least 14 pixels)."""
+
+PALETTE = (  # Okabe and Ito's colour-blind-safe set first; no green, which marks seeds
+    (0, 114, 178),  # blue
+    (230, 159, 0),  # orange
+    (204, 121, 167),  # reddish purple
+    (86, 180, 233),  # sky blue
+    (213, 94, 0),  # vermilion
+    (240, 228, 66),  # yellow
+    (140, 86, 75),  # brown
+    (127, 127, 127),  # grey
+    (148, 103, 189),  # violet
+    (23, 190, 207),  # cyan
+)
+"""Colours of a program's states, in the order of `Program.states` (wrapping after ten)."""
+OVERLAYS = ("values", "links", "error")
+"""What `Renderer.draw` can draw over the robots, each on request."""
+LINK_BLUE = (40, 90, 200, 110)
+ERROR_RED = (220, 30, 30)
+TEXT_DARK = (20, 20, 24)
+TEXT_LIGHT = (250, 250, 250)
+VALUE_MIN_CELL = 12
+"""Pixels per cell below which numbers on robots are too small to read and are not drawn."""
+UNKNOWN = 999
+"""`Program.shown` values from this up (and negative ones) mean unknown: left blank."""
 
 SHADES = (  # indexed by State
     lambda rgb: tuple(int(c + (255 - c) * 0.55) for c in rgb),  # waiting: pale
     lambda rgb: rgb,  # moving: the group's colour
     lambda rgb: tuple(int(c * 0.62) for c in rgb),  # settled: darker
     lambda rgb: tuple(int(c + (255 - c) * 0.35) for c in rgb),  # wandering: light
+    lambda rgb: STALLED_GREY,  # stalled: charcoal, whatever the group
+    lambda rgb: rgb,  # lost: never drawn
 )
 
 
@@ -38,7 +78,8 @@ class Renderer:
     def __init__(self, world: World) -> None:
         self.world = world
         self._background: pygame.Surface | None = None
-        self._squares: dict[tuple[int, int], pygame.Surface] = {}
+        self._squares: dict[tuple[int, tuple[int, int, int]], pygame.Surface] = {}
+        self._texts: dict[tuple[int, int, bool], pygame.Surface] = {}
 
     def fit(self, area: pygame.Rect) -> tuple[int, tuple[int, int]]:
         """Whole pixels per cell and the pixel position of the world's top-left corner."""
@@ -56,10 +97,14 @@ class Renderer:
         return pygame.Rect(ox + cell_xy[0] * size, oy + cell_xy[1] * size, size, size)
 
     def draw(
-        self, surface: pygame.Surface, swarm: Swarm | None, area: pygame.Rect | None = None
+        self,
+        surface: pygame.Surface,
+        swarm: Swarm | None,
+        area: pygame.Rect | None = None,
+        overlays: Collection[str] = (),
     ) -> None:
         """Draw the world, and the swarm if there is one, into `area` (default: all of
-        `surface`), scaled to fit."""
+        `surface`), scaled to fit, with the named `OVERLAYS` on top (a local program's only)."""
         area = area or surface.get_rect()
         cell, origin = self.fit(area)
         background = self._background_at(cell)
@@ -69,15 +114,139 @@ class Renderer:
         if swarm is None:
             return
         gap = 1 if cell >= 4 else 0
+        here = swarm.present
         corner = np.floor((swarm.positions() - 0.5) * cell + np.array(origin) + gap).astype(int)
-        kind = swarm.group * len(SHADES) + swarm.state
+        self._lost_marks(surface, swarm, cell, origin)
+        corner = corner[here]
+        kind, colours = _colours(swarm)
+        kind = kind[here]
         order = np.argsort(kind, kind="stable")
-        bounds = np.searchsorted(kind[order], np.arange(len(self.world.groups) * len(SHADES) + 1))
+        bounds = np.searchsorted(kind[order], np.arange(len(colours) + 1))
         corners = corner[order].tolist()
-        for index, (start, stop) in enumerate(pairwise(bounds)):
+        for colour, (start, stop) in zip(colours, pairwise(bounds), strict=True):
             if start < stop:  # one blit call per colour draws all its squares
-                square = self._square(cell - 2 * gap, index)
+                square = self._square(cell - 2 * gap, colour)
                 surface.fblits(zip(repeat(square), corners[start:stop]))
+        program = program_of(swarm)
+        if program is None or not overlays:
+            return
+        if "links" in overlays:
+            self._links(surface, swarm, cell, origin, world_rect)
+        if "error" in overlays:
+            self._errors(surface, swarm, program, cell, origin)
+        if "values" in overlays and program.shown is not None and cell >= VALUE_MIN_CELL:
+            self._values(surface, swarm, program, cell, origin, colours, kind)
+
+    def _links(
+        self,
+        surface: pygame.Surface,
+        swarm: Swarm,
+        cell: int,
+        origin: tuple[int, int],
+        world_rect: pygame.Rect,
+    ) -> None:
+        """A thin line per pair of robots (or robot and seed) that heard each other in the last
+        step, drawn once per pair on one translucent layer."""
+        links = swarm.driver.links
+        if links is None or not len(links[0]):
+            return
+        owner, other = links
+        n = len(swarm.cell)
+        centres = np.concatenate([swarm.positions(), swarm.world.seeds + 0.5])
+        alive = np.concatenate([swarm.present, np.ones(len(swarm.world.seeds), dtype=bool)])
+        keep = alive[owner] & alive[other]
+        low, high = np.minimum(owner, other)[keep], np.maximum(owner, other)[keep]
+        pairs = np.unique(low * (n + len(swarm.world.seeds)) + high)
+        low, high = np.divmod(pairs, n + len(swarm.world.seeds))
+        ends = np.floor(centres * cell).astype(int)  # relative to the world's corner
+        layer = pygame.Surface(world_rect.size, pygame.SRCALPHA)
+        line, width = pygame.draw.line, 1 if cell < 24 else 2
+        for a, b in zip(ends[low].tolist(), ends[high].tolist(), strict=True):
+            line(layer, LINK_BLUE, a, b, width)
+        surface.blit(layer, origin)
+
+    def _errors(
+        self,
+        surface: pygame.Surface,
+        swarm: Swarm,
+        program: Program,
+        cell: int,
+        origin: tuple[int, int],
+    ) -> None:
+        """A red line from each localised robot's centre to the centre of the cell it believes
+        it is on, ending in a dot there; none where that is its cell, as the metrics count it
+        (a robot under way still counts the cell it left)."""
+        estimate = program.estimate(swarm.driver.memory)
+        if estimate is None:
+            return
+        localised, frame_cells = estimate
+        robots = np.flatnonzero(np.asarray(localised, dtype=bool) & swarm.present)
+        believed = np.zeros((len(robots), 2), dtype=np.int64)
+        for group, g in enumerate(swarm.world.groups):
+            mine = swarm.group[robots] == group
+            believed[mine] = g.pose.to_world(np.asarray(frame_cells)[robots[mine]])
+        off = (believed != swarm.cell[robots]).any(axis=1)
+        truth, believed = swarm.positions()[robots], believed + 0.5
+        at = np.array(origin)
+        starts = np.floor(truth[off] * cell + at).astype(int).tolist()
+        ends = np.floor(believed[off] * cell + at).astype(int).tolist()
+        width, dot = max(1, cell // 8), max(2, cell // 6)
+        for a, b in zip(starts, ends, strict=True):
+            pygame.draw.line(surface, ERROR_RED, a, b, width)
+            pygame.draw.circle(surface, ERROR_RED, b, dot)
+
+    def _values(
+        self,
+        surface: pygame.Surface,
+        swarm: Swarm,
+        program: Program,
+        cell: int,
+        origin: tuple[int, int],
+        colours: list[tuple[int, int, int]],
+        kind: np.ndarray,
+    ) -> None:
+        """The `shown` slot's value on each present robot, dark or light to suit its colour."""
+        values = np.asarray(getattr(swarm.driver.memory, program.shown))
+        here = np.flatnonzero(swarm.present)
+        values = values[here]
+        known = (values >= 0) & (values < UNKNOWN)
+        centre = np.floor(swarm.positions()[here] * cell + np.array(origin)).astype(int)
+        light = np.array([sum(c) < 330 for c in colours])[kind]
+        font = _font(max(8, round(cell * 0.8)))
+        blits = []
+        for value, (x, y), on_dark in zip(
+            values[known].tolist(), centre[known].tolist(), light[known].tolist(), strict=True
+        ):
+            text = self._text(font, cell, int(value), on_dark)
+            blits.append((text, (x - text.get_width() // 2, y - text.get_height() // 2)))
+        surface.fblits(blits)
+
+    def _text(self, font: pygame.font.Font, cell: int, value: int, light: bool) -> pygame.Surface:
+        """A number rendered once per cell size and colour, shrunk to fit inside a cell."""
+        key = (cell, value, light)
+        if key not in self._texts:
+            text = font.render(str(value), True, TEXT_LIGHT if light else TEXT_DARK)
+            room = cell - 2
+            if text.get_width() > room:
+                scale = room / text.get_width()
+                text = pygame.transform.smoothscale(
+                    text, (room, max(1, round(text.get_height() * scale)))
+                )
+            self._texts[key] = text
+        return self._texts[key]
+
+    def _lost_marks(
+        self, surface: pygame.Surface, swarm: Swarm, cell: int, origin: tuple[int, int]
+    ) -> None:
+        """A red cross on the last cell of each robot removed in the last few steps."""
+        lost_at = swarm.faults.lost_at
+        recent = np.flatnonzero((lost_at >= 0) & (lost_at >= swarm.step_count - LOST_MARK_STEPS))
+        width = max(1, cell // 6)
+        for x, y in (swarm.cell[recent] * cell + np.array(origin)).tolist():
+            inset = max(1, cell // 5)
+            low, high = inset, cell - 1 - inset
+            pygame.draw.line(surface, LOST_RED, (x + low, y + low), (x + high, y + high), width)
+            pygame.draw.line(surface, LOST_RED, (x + low, y + high), (x + high, y + low), width)
 
     def _background_at(self, cell: int) -> pygame.Surface:
         width, height = self.world.size
@@ -94,15 +263,41 @@ class Renderer:
         self._background = background
         return background
 
-    def _square(self, side: int, index: int) -> pygame.Surface:
-        """A filled square for group ``index // 4`` in state ``index % 4``, made once."""
-        key = (side, index)
+    def _square(self, side: int, colour: tuple[int, int, int]) -> pygame.Surface:
+        """A filled square of one colour, made once."""
+        key = (side, colour)
         if key not in self._squares:
-            group, state = divmod(index, len(SHADES))
             square = pygame.Surface((max(1, side), max(1, side)))
-            square.fill(SHADES[state](self.world.groups[group].colour))
+            square.fill(colour)
             self._squares[key] = square
         return self._squares[key]
+
+
+def program_of(swarm: Swarm | None) -> Program | None:
+    """The local program driving `swarm`, or None (a central strategy, or no swarm)."""
+    driver = None if swarm is None else swarm.driver
+    return driver.program if isinstance(driver, LocalControl) else None
+
+
+def legend(swarm: Swarm | None) -> list[tuple[str, tuple[int, int, int]]]:
+    """The program's state names and their colours, when robots are coloured by state."""
+    program = program_of(swarm)
+    if program is None or not program.states:
+        return []
+    return [(name, PALETTE[i % len(PALETTE)]) for i, name in enumerate(program.states)]
+
+
+def _colours(swarm: Swarm) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
+    """Each robot's colour index and the colours: by a local program's ``memory.state`` when it
+    names its `states`, else its group's colour shaded by what it is doing (stalled robots are
+    charcoal either way)."""
+    named = legend(swarm)
+    if named:
+        colours = [colour for _, colour in named] + [STALLED_GREY]
+        kind = np.asarray(swarm.driver.memory.state, dtype=np.int64) % len(named)
+        return np.where(swarm.state == STALLED, len(named), kind), colours
+    colours = [shade(g.colour) for g in swarm.world.groups for shade in SHADES]
+    return swarm.group * len(SHADES) + swarm.state, colours
 
 
 def frame(

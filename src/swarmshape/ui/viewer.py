@@ -6,7 +6,10 @@ speed, and draws one frame, so tests can post events and drive it frame by frame
 every robot at rest, no swarm yet) a tick waits for an event instead, and draws only if one
 came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
 running; Enter (or `e` again) hands the painted shape to the swarm, or starts one if none runs
-yet.
+yet. `x` toggles the fault tool: a click removes the robot under the cursor, a drag removes
+every robot in the rectangle. Under a local program, robots take the colours of its states (a
+legend in the corner names them) and `g`, `l`, `o` toggle the overlays: its gradient values,
+its communication links, and its localisation error.
 """
 
 from __future__ import annotations
@@ -25,7 +28,9 @@ from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write
 from swarmshape.ui.editor import HELP_LINES, Canvas, Editor
-from swarmshape.ui.render import Renderer
+from swarmshape.ui.render import VALUE_MIN_CELL, Renderer, legend, program_of
+
+FAULT_EVENTS = (pygame.MOUSEBUTTONDOWN, pygame.MOUSEMOTION, pygame.MOUSEBUTTONUP)
 
 SPEEDS = (0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256)
 """Simulation steps per frame that `+` and `-` move between."""
@@ -40,7 +45,15 @@ HUD_HEIGHT = 48
 HUD_BACK = (38, 40, 46)
 HUD_TEXT = (235, 235, 235)
 HUD_DIM = (150, 155, 165)
-HELP = "Space pause   . step   + - speed   r restart   e edit   F12 screenshot   q quit"
+HELP = (
+    "Space pause   . step   + - speed   r restart   e edit   x fault tool   "
+    "g l o overlays   F12 screenshot   q quit"
+)
+OVERLAY_KEYS = {pygame.K_g: "values", pygame.K_l: "links", pygame.K_o: "error"}
+"""Keys that toggle `render.OVERLAYS`: a local program's gradient values, communication links
+and localisation error."""
+FAULT_HELP = "fault tool: click removes a robot, drag removes all in a rectangle   x: done"
+DRAG_RED = (214, 40, 40)
 
 
 class Viewer:
@@ -95,6 +108,13 @@ class Viewer:
         self._backdrop: tuple | None = None
         """What the editor's arena was drawn for, and its renderer."""
         self._shape_file = shape_file
+        self.fault_tool = False
+        """While on, clicks and drags remove robots."""
+        self._drag_from: tuple[int, int] | None = None
+        """The cell a fault-tool drag started on."""
+        self._drag_to: tuple[int, int] | None = None
+        self.overlays: set[str] = set()
+        """What `render.Renderer.draw` draws over a local program's robots."""
         if not start:
             self.start_editing()
 
@@ -122,7 +142,7 @@ class Viewer:
         swarm = self.swarm
         if swarm is None or self.paused or self.out_of_steps:
             return True
-        if not swarm.complete:
+        if not swarm.complete or swarm.faults.ahead(swarm.step_count):
             return False
         return not (np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any())
 
@@ -164,8 +184,39 @@ class Viewer:
                 self.quit()
             else:
                 self._follow_editor()
+        elif self.fault_tool and event.type in FAULT_EVENTS:
+            self._fault_tool(event)
         elif event.type == pygame.KEYDOWN:
             self._key(event)
+
+    def _fault_tool(self, event: pygame.event.Event) -> None:
+        """A press starts a rectangle, a move stretches it, a release removes the robots in it
+        (a click: the robot under the cursor)."""
+        cell = self.cell_at(event.pos)
+        if event.type == pygame.MOUSEBUTTONDOWN and event.button == 1:
+            self._drag_from = self._drag_to = cell
+        elif event.type == pygame.MOUSEMOTION and self._drag_from is not None:
+            self._drag_to = cell or self._drag_to
+        elif event.type == pygame.MOUSEBUTTONUP and event.button == 1:
+            start, end = self._drag_from, cell or self._drag_to
+            self._drag_from = self._drag_to = None
+            if start is None or end is None or self.swarm is None:
+                return
+            self.remove_robots(start, end)
+
+    def remove_robots(self, corner: tuple[int, int], other: tuple[int, int]) -> int:
+        """Remove every robot whose square's centre lies in the rectangle of cells between two
+        corners (one cell: the robot on it); say how many."""
+        swarm = self.swarm
+        low, high = np.minimum(corner, other), np.maximum(corner, other)
+        under = swarm.cells_under()
+        inside = (under >= low).all(axis=1) & (under <= high).all(axis=1) & swarm.present
+        robots = np.flatnonzero(inside)
+        if len(robots):
+            swarm.fail(robots, "remove", label="window")
+            self._follow_world()
+        self.notice = f"removed {len(robots)} robot{'' if len(robots) == 1 else 's'}"
+        return len(robots)
 
     def _key(self, event: pygame.event.Event) -> None:
         key = event.key
@@ -188,11 +239,43 @@ class Viewer:
             self.notice = f"restarted with seed {self.swarm.seed}"
         elif key == pygame.K_e:
             self.start_editing()
+        elif key == pygame.K_x and self.swarm is not None:
+            self.fault_tool = not self.fault_tool
+            self._drag_from = self._drag_to = None
+            self.notice = FAULT_HELP if self.fault_tool else "fault tool off"
+        elif key in OVERLAY_KEYS:
+            self.toggle_overlay(OVERLAY_KEYS[key])
+
+    def toggle_overlay(self, name: str) -> None:
+        """Switch one overlay on or off and say so, or say why it would show nothing."""
+        program = program_of(self.swarm)
+        if program is None:
+            self.notice = "no local program: overlays show a local program's values and links"
+            return
+        if name in self.overlays:
+            self.overlays.discard(name)
+            self.notice = f"{name} overlay off"
+            return
+        self.overlays.add(name)
+        self.notice = f"{name} overlay on"
+        if name == "values" and program.shown is None:
+            self.notice += f": {program.name} shows no memory slot (Program.shown)"
+        elif name == "values" and self.renderer.fit(self._world_area())[0] < VALUE_MIN_CELL:
+            self.notice += ": cells too small to read, enlarge the window"
+        elif name == "error" and program.estimate(self.swarm.driver.memory) is None:
+            self.notice += f": {program.name} does not localise (Program.estimate)"
 
     def step(self) -> None:
         self.swarm.step()
         for observer in self.observers:
             observer.capture(self.swarm)
+        self._follow_world()
+
+    def _follow_world(self) -> None:
+        """Draw the world the swarm has now (a fault may have re-formed it smaller)."""
+        if self.swarm.world is not self.world and not self.editing:
+            self.world = self.swarm.world
+            self.renderer = Renderer(self.world)
 
     def quit(self) -> None:
         """Stop; a painting that was never saved is kept as NAME.autosave.png first."""
@@ -283,7 +366,14 @@ class Viewer:
 
     def draw(self) -> None:
         area = self._world_area()
-        self.renderer.draw(self.screen, self.swarm, area)
+        self.renderer.draw(self.screen, self.swarm, area, self.overlays)
+        if not self.editing:
+            self._legend(area)
+        if self._drag_from is not None and self._drag_to is not None:
+            first = self.renderer.cell_rect(self._drag_from, area)
+            pygame.draw.rect(
+                self.screen, DRAG_RED, first.union(self.renderer.cell_rect(self._drag_to, area)), 2
+            )
         if self.editing:
             self.editor.draw(self.screen, lambda cell: self.renderer.cell_rect(cell, area))
             if self.editor.show_help:
@@ -295,6 +385,20 @@ class Viewer:
         self.screen.fill(HUD_BACK, (0, 0, width, HUD_HEIGHT))
         self._text(self.status(), (10, 6), HUD_TEXT)
         self._text(self._second_line(), (10, 27), HUD_DIM)
+
+    def _legend(self, area: pygame.Rect) -> None:
+        """The local program's state colours, in the arena's bottom-left corner."""
+        entries = legend(self.swarm)
+        if not entries:
+            return
+        width = max(self.font.size(name)[0] for name, _ in entries) + 38
+        panel = pygame.Rect(0, 0, width, 20 * len(entries) + 8)
+        panel.bottomleft = (area.left + 8, area.bottom - 8)
+        self.screen.fill(HUD_BACK, panel)
+        for row, (name, colour) in enumerate(entries):
+            y = panel.y + 5 + 20 * row
+            self.screen.fill(colour, (panel.x + 8, y + 2, 14, 14))
+            self._text(name, (panel.x + 30, y + 1), HUD_TEXT)
 
     def _help_panel(self, area: pygame.Rect) -> pygame.Rect:
         """The corner of `area` where the help covers the fewest seeds, then painted cells."""
@@ -340,6 +444,12 @@ class Viewer:
         limit = "" if self.max_steps is None else f"/{self.max_steps}"
         if self.out_of_steps:
             formed += "   max steps reached"
+        if swarm.faults.lost:
+            formed += f"   lost {swarm.faults.lost}"
+        if self.fault_tool:
+            formed += "   FAULT TOOL"
+        if self.overlays and program_of(swarm) is not None:
+            formed += "   showing " + " ".join(sorted(self.overlays))
         return (
             f"step {swarm.step_count}{limit}   settled {settled}/{len(swarm.filled)}   "
             f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "

@@ -1,0 +1,721 @@
+"""`local-swap`: local task swapping (Wang and Rubenstein, "Shape formation in homogeneous swarms
+using local task swapping", IEEE Transactions on Robotics 36(3), 2020).
+
+No global matching and no global queue: robot number k of a group starts with the shape's k-th
+cell as its goal (robots numbered past the shape's size are spare), works out where it is from
+the seeds and localised neighbours, and walks greedily toward its goal. Neighbours within
+range trade goals whenever that shortens their summed distance, or when one is blocked by the
+other resting on its goal (the trade then sends both on). A trade needs both sides: each robot
+broadcasts the neighbour it wants to trade with, and two robots that want each other trade in
+the same step, from the same two messages, so a goal is never lost or held twice.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import ClassVar
+
+import numpy as np
+from scipy import ndimage
+
+from swarmshape.core.local import Memory, Program, Slot
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Blueprint, Perception, box_lookup
+from swarmshape.core.shape import SEED_CELLS
+from swarmshape.strategies import register, routes
+
+LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY = range(
+    16
+)
+"""What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
+it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
+GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
+robot (0 if localised), a gradient the lost ones climb down. OX, OY, OPEN_HOPS: a shape cell
+that nobody sits on or holds, and hops to the robot that sees it (see `_relay_open`). TWICE,
+TX, TY: a goal it hears held twice, by a robot at rest on it and one still on its way (see
+`_held_twice`)."""
+
+FAR = 1000
+"""HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
+of no open cell."""
+
+OPEN_REACH = 24
+"""Hops an open cell is relayed. A filled cell's news dies out by counting up to this (each
+robot takes its neighbours' fewest hops plus one), so it bounds how long a stale one lasts."""
+
+LOYALTY = 2
+"""Hops of news a robot gives up to keep to the open cell it heard of last step. Two seekers
+in a horseshoe's bay, with open cells at the ends of both arms, heard of the other one every
+few steps, turned each time, and never reached either."""
+
+LOST_REACH = 24
+"""Hops to a localised robot past which a robot counts as hearing of none. Three robots that
+lost their bearings far from the others each heard the other two tell of a way back that ran
+through itself, and counted up to `FAR` one hop a step before they set out to search, for a
+thousand steps."""
+
+PATIENCE = 4
+"""Steps a robot waits behind something before it goes round it (see `_go_round`)."""
+
+PUSH_HOPS = 1
+"""A robot without a goal trades its way into the shape through a robot resting in its way,
+toward an open cell it has news of, only if that robot is this many hops from an open cell
+or fewer, and nearer it (each push brings the robot without a goal nearer, so pushes never
+go round in a circle). So it never trades toward news that may be stale: a filled
+cell's news is gone from the robots near it within a step or two, and a formed shape stays as
+it is. Without this a robot in a horseshoe's bay never reached an open cell just beyond the
+bay's floor."""
+
+STUCK = 20
+"""Steps without getting nearer its target after which a robot takes a random step now and
+then (the planner sees three cells round it, and in a shape's bays its choices can go round
+a loop of four cells for ever), and a robot without a goal may push (see `PUSH_HOPS`). A
+push moves a robot that rests on its goal; walking round costs nobody else a step, and
+robots on cells that a reshape keeps stay where they are unless nobody can get past them. A
+robot pushed out of its cell pushes on at once: waiting, it was pushed back when `TABU` ran
+out, and the two did that for ever at a star's notch."""
+
+TABU = 10
+"""Steps two robots that traded do not trade with each other again: a robot pushed out of
+its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
+straight back from the one that pushed it, by the distance rule."""
+
+REVERSE = np.array([0, 2, 1, 4, 3])
+"""The opposite of each direction index."""
+
+BIG = 1 << 40
+"""Farther than any cell."""
+
+
+@register
+class LocalSwap(Program):
+    name = "local-swap"
+    description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
+    message_size = 16
+    memory: ClassVar[dict[str, Slot]] = {
+        "localised": Slot(bool, False),
+        "frame": Slot(np.int64, 0, 2),
+        "started": Slot(bool, False),
+        "has_goal": Slot(bool, False),
+        "goal": Slot(np.int64, 0, 2),
+        "wants": Slot(np.int64, -1),
+        "waited": Slot(np.int64, 0),
+        "blocked_way": Slot(np.int64, 0),
+        "detour": Slot(np.int64, 0),
+        "at_goal": Slot(bool, False),
+        "asked": Slot(np.int64, 0),
+        "roam": Slot(np.int64, 0),
+        "came": Slot(np.int64, 0),
+        "partner": Slot(np.int64, -1),
+        "since_trade": Slot(np.int64, 0),
+        "gave": Slot(bool, False),
+        "given": Slot(np.int64, 0, 2),
+        "aim": Slot(np.int64, 0, 2),
+        "closest": Slot(np.int64, 0),
+        "stuck": Slot(np.int64, 0),
+        "heard": Slot(np.int64, 0, 2),
+        "heard_hops": Slot(np.int64, FAR),
+        "routed": Slot(bool, False),
+    }
+
+    def act(
+        self, sense: Perception, memory: Memory, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        localise(sense, memory)
+        _first_goals(sense, memory)
+        rested = _goals_at_rest(sense, memory)  # before trading, as the messages tell them
+        twice, twice_cell = _held_twice(sense, rested)
+        _yield_taken(sense, memory)
+        _trade(sense, memory)
+        memory.has_goal &= sense.blueprint.contains(sense.group, memory.goal)  # a reshape
+        occupied = _occupied(sense)
+        _note_walls(sense, memory, occupied)
+        seeking = memory.localised & ~memory.has_goal
+        sight, open_cell, by_shape = _open_in_sight(sense, memory, self.senses.radius)
+        news, news_hops = _relay_open(sense, memory, self.senses.radius, sight, open_cell)
+        target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
+        blind = np.flatnonzero(seeking & (news_hops >= FAR) & ~by_shape)
+        target[blind] = _nearest_cell(sense, memory, blind)
+        here = (target == memory.frame).all(axis=1)
+        resting = memory.has_goal & (memory.goal == memory.frame).all(axis=1)
+        way = _deeper(sense, memory, occupied)
+        deepen = memory.localised & sense.ready & (way > 0) & (resting | seeking & open_cell & here)
+        memory.goal[deepen] = memory.frame[deepen] + STEPS[way[deepen]]
+        memory.has_goal[deepen] = True
+        seeking &= ~deepen
+        claim = seeking & open_cell & sense.ready & here
+        memory.goal[claim], memory.has_goal[claim] = memory.frame[claim], True
+        target[memory.has_goal] = memory.goal[memory.has_goal]
+        has_goal = memory.localised & memory.has_goal
+        memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
+        going = (has_goal | seeking) & (memory.frame != target).any(axis=1)
+        same_aim = (target == memory.aim).all(axis=1)
+        _note_progress(memory, target)
+        waypoint = _route(sense, memory, target, going & sense.ready, same_aim, self.senses.radius)
+        arrived = sense.moved.any(axis=1)
+        memory.came[arrived] = _direction(-sense.moved[arrived])
+        behind = occupied.copy()
+        behind[np.arange(len(sense)), memory.came] = True
+        delta = waypoint - memory.frame
+        preferred, first = _plan(sense, delta, behind, going, self.senses.radius)
+        memory.wants = _choose_partner(
+            sense, memory, preferred, target, seeking, news, news_hops, rested
+        )
+        moves = _go_round(memory, delta, preferred, first, occupied, going & sense.ready, rng)
+        astray = going & sense.ready & (memory.stuck > STUCK) & ~memory.routed
+        astray &= rng.random(len(sense)) < 0.25
+        moves[astray] = _random_free(occupied[astray], rng)
+        moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
+        hops, toward = _hops(sense, memory)
+        lost = ~memory.localised
+        moves[lost] = np.where(occupied[lost, toward[lost]], 0, toward[lost])
+        roaming = lost & (hops >= FAR)
+        moves[roaming] = _roam(memory, occupied, roaming, rng)
+        wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
+        moves[wander] = _random_free(occupied[wander], rng)
+        memory.asked = np.where(sense.ready, moves, 0)
+        stays = sense.ready & (moves == 0)
+        messages = np.column_stack(
+            [
+                memory.localised,
+                memory.frame,
+                memory.has_goal,
+                memory.goal,
+                memory.wants,
+                sense.number,
+                stays,
+                hops,
+                news,
+                np.minimum(news_hops, FAR),
+                twice,
+                twice_cell,
+            ]
+        ).astype(np.int64)
+        return moves, messages
+
+    def finished(self, memory: Memory) -> np.ndarray:
+        return memory.at_goal
+
+    def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
+        return memory.localised, memory.frame
+
+
+def _note_progress(memory: Memory, target: np.ndarray) -> None:
+    """Count the steps since each robot last came nearer its target; a new target starts
+    the count afresh. A robot with nowhere to go keeps its count and its target: a seeker in
+    a letter S's bay lost sight of its open cell every few steps, for a step, and so never
+    counted as stuck."""
+    left = np.abs(target - memory.frame).sum(axis=1)
+    aiming = left > 0
+    new = aiming & (target != memory.aim).any(axis=1)
+    nearer = aiming & (left < memory.closest)
+    memory.stuck = np.where(new | nearer, 0, memory.stuck + aiming)
+    memory.closest = np.where(new | nearer, left, memory.closest)
+    memory.aim[aiming] = target[aiming]
+
+
+def _route(
+    sense: Perception,
+    memory: Memory,
+    target: np.ndarray,
+    ready: np.ndarray,
+    same_aim: np.ndarray,
+    radius: float,
+) -> np.ndarray:
+    """The cell each robot plans toward: its target, or for a robot outside the shape that
+    made no headway for `STUCK` steps, a cell a few steps along its way round the shape to
+    it (`routes`). It keeps to the route while its target stays the same: back on
+    the direct way, it walked straight back to where it was stuck."""
+    kept = memory.routed & same_aim
+    outside = ~sense.blueprint.contains(sense.group, memory.frame)
+    rows = np.flatnonzero(ready & outside & (kept | (memory.stuck > STUCK)))
+    cells, found = routes.waypoints(
+        sense.blueprint, sense.group[rows], memory.frame[rows], target[rows], int(radius)
+    )
+    memory.routed = np.where(ready, False, kept)
+    memory.routed[rows[found]] = True
+    waypoint = target.copy()
+    waypoint[rows[found]] = cells[found]
+    return waypoint
+
+
+def _first_goals(sense: Perception, memory: Memory) -> None:
+    """On its first step robot number k takes its shape's k-th cell (none past the shape's
+    size): the one assignment every robot can draw alone, unique by construction."""
+    new = np.flatnonzero(~memory.started)
+    take = new[sense.number[new] < sense.blueprint.count(sense.group[new])]
+    memory.goal[take] = sense.blueprint.cell(sense.group[take], sense.number[take])
+    memory.has_goal[take] = True
+    memory.started[new] = True
+
+
+def _yield_taken(sense: Perception, memory: Memory) -> None:
+    """Give up a goal that a neighbour holds too and already rests on, or that a neighbour
+    says is held so (`_held_twice`). Goals are unique except after a spare robot claimed a
+    cell whose holder was out of range; the one that got there keeps it. A goal traded for
+    in the last two steps is not the one a neighbour's word is about (it spoke a step before
+    the trade)."""
+    me, msg = sense.owner, sense.message
+    theirs = msg[:, X : Y + 1]
+    there = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
+    there &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1)
+    there &= (theirs == msg[:, GX : GY + 1]).all(axis=1) & (theirs == memory.goal[me]).all(axis=1)
+    told = sense.heard & sense.kin & ~sense.seed & (msg[:, TWICE] == 1)
+    told &= (msg[:, TX : TY + 1] == memory.goal[me]).all(axis=1) & (memory.since_trade[me] > 1)
+    drop = (there | told) & memory.has_goal[me] & (memory.frame[me] != memory.goal[me]).any(axis=1)
+    memory.has_goal[me[drop]] = False
+
+
+def _goals_at_rest(sense: Perception, memory: Memory) -> np.ndarray:
+    """Sorted keys (`_key`) of each robot and a goal it knows a robot rests on: a neighbour
+    that says so, or itself."""
+    me, msg = sense.owner, sense.message
+    theirs = msg[:, X : Y + 1]
+    resting = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
+    resting &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1) & (theirs == msg[:, GX : GY + 1]).all(1)
+    own = memory.localised & memory.has_goal & (memory.frame == memory.goal).all(axis=1)
+    return np.unique(
+        np.concatenate(
+            [_key(me[resting], theirs[resting]), _key(np.flatnonzero(own), memory.goal[own])]
+        )
+    )
+
+
+def _key(robot: np.ndarray, cell: np.ndarray) -> np.ndarray:
+    """One integer per robot and frame cell, for set lookups (`np.isin`)."""
+    span = np.int64(1 << 21)
+    return (robot.astype(np.int64) * span + cell[:, 0] + span // 2) * span + cell[:, 1] + span // 2
+
+
+def _held_twice(sense: Perception, rested: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per robot, whether it hears a neighbour on its way to a goal that another robot rests
+    on, and that goal: it says so, and the one on its way gives the goal up. Without this a
+    spare robot that claimed a cell whose holder was far away kept the goal, traded it into
+    the formed shape, and a robot there left its cell for it."""
+    me, msg = sense.owner, sense.message
+    goal = msg[:, GX : GY + 1]
+    away = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1) & (msg[:, HAS] == 1)
+    away &= (msg[:, X : Y + 1] != goal).any(axis=1) & np.isin(_key(me, goal), rested)
+    first = _best_per_robot(len(sense), me, np.zeros(len(me)), away)
+    cell = np.zeros((len(sense), 2), dtype=np.int64)
+    cell[first >= 0] = goal[first[first >= 0]]
+    return first >= 0, cell
+
+
+def _open_in_sight(
+    sense: Perception, memory: Memory, radius: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per robot, the nearest shape cell within sensing range that no neighbour sits on or
+    holds, and whether there is one; and whether it sees any shape cell at all. After a
+    reshape or a fault the open cells have no holder, and only robots that look for them can
+    fill them. Its own cell counts (a robot standing on an open cell claims it), its own goal
+    does not, nor one it has just traded away (its partner's message saying so is a step
+    behind; a robot pushed out of its cell claimed it straight back)."""
+    recent = memory.gave & (memory.since_trade < TABU)
+    disc = _disc(radius)
+    n, reach = len(sense), int(radius)
+    cells = memory.frame[:, None, :] + disc[None, :, :]
+    groups = np.repeat(sense.group, len(disc))
+    inside = sense.blueprint.contains(groups, cells.reshape(-1, 2)).reshape(n, len(disc))
+    taken = np.zeros_like(inside)
+    index = _disc_index(radius)
+    me, msg = sense.owner, sense.message
+    holds = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
+    sat = np.rint(sense.offset).astype(np.int64)
+    for rows, relative in (
+        (me, sat),
+        (me[holds], msg[holds, GX : GY + 1] - memory.frame[me[holds]]),
+        (np.flatnonzero(memory.has_goal), (memory.goal - memory.frame)[memory.has_goal]),
+        (np.flatnonzero(recent), (memory.given - memory.frame)[recent]),
+    ):
+        near = (np.abs(relative) <= reach).all(axis=1)
+        slot = index[relative[near, 0] + reach, relative[near, 1] + reach]
+        taken[rows[near][slot >= 0], slot[slot >= 0]] = True
+    free = inside & ~taken & memory.localised[:, None]
+    nearest = free.argmax(axis=1)
+    return cells[np.arange(n), nearest], free.any(axis=1), inside.any(axis=1)
+
+
+@functools.lru_cache(maxsize=4)
+def _disc(radius: float) -> np.ndarray:
+    """The cell offsets within `radius`, nearest first (by steps, then straight-line)."""
+    reach = int(radius)
+    span = np.arange(-reach, reach + 1)
+    grid = np.stack(np.meshgrid(span, span, indexing="ij"), axis=-1).reshape(-1, 2)
+    grid = grid[np.hypot(*grid.T) <= radius]
+    return grid[np.lexsort((np.hypot(*grid.T), np.abs(grid).sum(axis=1)))]
+
+
+@functools.lru_cache(maxsize=4)
+def _disc_index(radius: float) -> np.ndarray:
+    """Each offset's place in `_disc` (offsets from ``-reach`` stored from 0), or -1."""
+    reach = int(radius)
+    index = np.full((2 * reach + 1, 2 * reach + 1), -1, dtype=np.int64)
+    disc = _disc(radius)
+    index[disc[:, 0] + reach, disc[:, 1] + reach] = np.arange(len(disc))
+    return index
+
+
+def _relay_open(
+    sense: Perception,
+    memory: Memory,
+    radius: float,
+    sight: np.ndarray,
+    seen: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """An open cell each robot knows of, and hops to the robot that sees it (FAR: none): its
+    own sight, or the news with fewest hops that its neighbours relay. A robot trusts its own
+    eyes over news of a cell in its range. Robots without a goal head for it, so an open cell
+    anywhere, even deep inside the shape, draws them in; walking round the shape until one
+    came in sight took hundreds of steps on an 8 by 8 square. A robot that hears no news
+    goes on by the last it heard, a hop older each step: one in the bay of a 1,000-cell
+    letter S walked toward an open cell, out of earshot of the robots that told of it, back
+    to them, and so on for thousands of steps."""
+    me, msg = sense.owner, sense.message
+    news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
+    news &= memory.localised[me]
+    news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
+    known = (msg[:, OX : OY + 1] == memory.heard[me]).all(axis=1)
+    best = _best_per_robot(len(sense), me, msg[:, OPEN_HOPS] - LOYALTY * known, news)
+    told = (best >= 0) & ~seen
+    cell, hops = sight.copy(), np.where(seen, 0, FAR)
+    cell[told] = msg[best[told], OX : OY + 1]
+    hops[told] = msg[best[told], OPEN_HOPS] + 1
+    recall = (hops >= FAR) & (memory.heard_hops + 1 < OPEN_REACH) & memory.localised
+    recall &= np.hypot(*(memory.heard - memory.frame).T) > radius
+    cell[recall], hops[recall] = memory.heard[recall], memory.heard_hops[recall] + 1
+    memory.heard, memory.heard_hops = cell.copy(), hops.copy()
+    return cell, hops
+
+
+def _nearest_cell(sense: Perception, memory: Memory, rows: np.ndarray) -> np.ndarray:
+    """For robots out of sight of the shape, its nearest cell."""
+    target = memory.frame[rows].copy()
+    for group, cells in enumerate(sense.blueprint.cells):
+        mine = sense.group[rows] == group
+        if mine.any() and len(cells):
+            far = np.abs(memory.frame[rows[mine], None, :] - cells[None, :, :]).sum(axis=2)
+            target[mine] = cells[far.argmin(axis=1)]
+    return target
+
+
+def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarray:
+    """Per robot, the way to an adjacent open cell deeper in the shape than its own (depth:
+    steps to the nearest cell outside the shape), or 0. Filling from the inside out is our
+    lattice addition, not the paper's: a robot resting on the shape steps into a deeper
+    hole and leaves its own cell open one step nearer the rim, so holes that faults punch
+    into a formed shape surface where spare robots reach them, and robots that claim the
+    rim of new rows never wall the inner row in. Each such step raises the summed depth of
+    occupied cells, so it ends."""
+    depth = _depth(sense.blueprint)
+    mine = box_lookup(depth, sense.group, memory.frame)
+    held = np.zeros_like(occupied)
+    me, msg = sense.owner, sense.message
+    talk = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
+    relative = msg[:, GX : GY + 1] - memory.frame[me]
+    best, way = mine.copy(), np.zeros(len(sense), dtype=np.int64)
+    for direction in range(1, len(STEPS)):
+        held[me[talk & (relative == STEPS[direction]).all(axis=1)], direction] = True
+        there = box_lookup(depth, sense.group, memory.frame + STEPS[direction])
+        better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
+        best, way = np.where(better, there, best), np.where(better, direction, way)
+    return np.where(mine > 0, way, 0)
+
+
+@functools.lru_cache(maxsize=4)
+def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Per group, the low corner of its shape's box (less one) and the taxicab distance of
+    each cell to the nearest cell outside the shape (0 outside), in a box padded by one. The
+    seeds count as inside: no robot comes in past them, and a cell they wall off from the
+    outside must be filled from deeper in. They sit on fixed cells of the seed frame (the
+    frame is theirs), so every robot knows them as it knows the bitmap. So do pockets of
+    outside that shape and seeds enclose (a cut corner beside the seeds)."""
+    out = []
+    for shape in blueprint.cells:
+        cells = np.concatenate([shape, SEED_CELLS]) if len(shape) else shape
+        low = cells.min(axis=0) - 1 if len(cells) else np.zeros(2, dtype=np.int64)
+        size = cells.max(axis=0) - low + 2 if len(cells) else np.ones(2, dtype=np.int64)
+        grid = np.zeros(size, dtype=bool)
+        grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+        inside = ndimage.binary_fill_holes(grid)
+        depth = ndimage.distance_transform_cdt(inside, metric="taxicab")
+        out.append((low, np.where(grid, depth, 0)))
+    return tuple(out)
+
+
+def localise(sense: Perception, memory: Memory) -> None:
+    """Dead-reckon localised robots by their odometry; a robot at rest that is not localised
+    takes its frame cell from its nearest seed or localised neighbour (that one's frame cell
+    less the sensed offset), when the offset reads as whole cells."""
+    memory.frame[memory.localised] += sense.moved[memory.localised]
+    cells = np.rint(sense.offset).astype(np.int64)
+    whole = (np.abs(sense.offset - cells) < 0.25).all(axis=1)
+    robot = sense.heard & sense.kin & ~sense.seed & (sense.message[:, LOCALISED] == 1)
+    robot &= sense.message[:, STAYS] == 1
+    reference = np.where(sense.seed[:, None], sense.seed_frame, sense.message[:, X : Y + 1])
+    usable = whole & (robot | sense.heard & sense.kin & sense.seed)
+    usable &= ~memory.localised[sense.owner] & sense.ready[sense.owner]
+    first = _best_per_robot(len(sense), sense.owner, np.zeros(len(usable)), usable)
+    found = first >= 0
+    memory.frame[found] = (reference - cells)[first[found]]
+    memory.localised |= found
+
+
+def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
+    """Each robot's hops to a localised robot (a seed counts), and the direction of its
+    neighbour nearest one (0 if none is nearer than itself)."""
+    heard_hops = np.where(
+        sense.seed, 0, np.where(sense.kin & ~sense.seed, sense.message[:, HOPS], FAR)
+    )
+    heard_hops = np.where(sense.heard & sense.kin, heard_hops, FAR)
+    heard_hops[~sense.seed & (sense.message[:, LOCALISED] == 0) & (heard_hops == 0)] = FAR
+    best = _best_per_robot(len(sense), sense.owner, heard_hops, np.ones(len(heard_hops), bool))
+    found = best >= 0
+    nearest = np.full(len(sense), FAR, dtype=np.int64)
+    nearest[found] = heard_hops[best[found]]
+    hops = np.where(memory.localised, 0, np.where(nearest < LOST_REACH, nearest + 1, FAR))
+    offset = np.zeros((len(sense), 2))
+    offset[found] = sense.offset[best[found]]
+    along_x = np.abs(offset[:, 0]) >= np.abs(offset[:, 1])
+    way = np.where(along_x, np.where(offset[:, 0] > 0, 1, 2), np.where(offset[:, 1] > 0, 3, 4))
+    closer = found & (nearest < FAR) & (np.abs(offset).max(axis=1) >= 1.5)
+    return hops, np.where(closer, way, 0)
+
+
+def _best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
+    the first, in reach order), or -1."""
+    order = np.lexsort((key, owner))  # stable: equal keys stay in reach order
+    order = order[mask[order]]
+    best = np.full(n, -1, dtype=np.int64)
+    owners = owner[order]
+    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
+    best[owner[firsts]] = firsts
+    return best
+
+
+def _occupied(sense: Perception) -> np.ndarray:
+    """``(n, 5)``: whether something sits in the cell one step in each direction."""
+    cells = np.rint(sense.offset).astype(np.int64)
+    occupied = np.zeros((len(sense), len(STEPS)), dtype=bool)
+    for direction in range(1, len(STEPS)):
+        near = (np.abs(sense.offset - STEPS[direction]) < 0.75).all(axis=1)
+        hit = near & (cells == STEPS[direction]).all(axis=1)
+        occupied[sense.owner[hit], direction] = True
+    return occupied
+
+
+def _note_walls(sense: Perception, memory: Memory, occupied: np.ndarray) -> None:
+    """A move asked for last step that did not happen met something a robot cannot sense (the
+    arena's edge, or a cell another robot took first): treat that way as blocked now, so a
+    detour turns back at a wall instead of pushing into it for ever."""
+    failed = np.flatnonzero(sense.ready & (memory.asked > 0) & (sense.moved == 0).all(axis=1))
+    occupied[failed, memory.asked[failed]] = True
+
+
+def _plan(
+    sense: Perception, delta: np.ndarray, occupied: np.ndarray, going: np.ndarray, radius: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """A robot's first step on the shortest free path, within the square it senses, to the
+    free cell there nearest its goal (0: none nearer than where it is, or not going); and the
+    straight way to the goal, the longer axis first. A robot that only stepped straight at its
+    goal took the long way round the shape half the time (it picked a side by coin when
+    blocked), and the last open cell of an 8 by 8 square waited hundreds of steps for it.
+    It plans over the cells it can sense only, and never straight back the way it came:
+    counting cells out of range as free sent robots toward them and back once they came in
+    sight, and two robots that each stepped aside for the other did so for ever."""
+    x = np.where(delta[:, 0] > 0, 1, np.where(delta[:, 0] < 0, 2, 0))
+    y = np.where(delta[:, 1] > 0, 3, np.where(delta[:, 1] < 0, 4, 0))
+    first = np.where(np.abs(delta[:, 0]) >= np.abs(delta[:, 1]), x, y)
+    rows = np.flatnonzero(going)
+    reach = int(radius)
+    side = 2 * reach + 1
+    blocked = np.ones((len(sense), side, side), dtype=bool)
+    disc = _disc(radius)
+    blocked[:, disc[:, 0] + reach, disc[:, 1] + reach] = False
+    sat = np.rint(sense.offset).astype(np.int64)
+    near = (np.abs(sat) <= reach).all(axis=1)
+    blocked[sense.owner[near], sat[near, 0] + reach, sat[near, 1] + reach] = True
+    for direction in range(1, len(STEPS)):
+        (dx, dy) = STEPS[direction] + reach
+        blocked[occupied[:, direction], dx, dy] = True
+    blocked = blocked[rows]
+    steps = np.full(blocked.shape, -1, dtype=np.int64)
+    way = np.zeros(blocked.shape, dtype=np.int64)
+    steps[:, reach, reach] = 0
+    for distance in range(1, side * side):
+        grown = False
+        for direction in range(1, len(STEPS)):
+            dx, dy = STEPS[direction]
+            source = _shifted(steps == distance - 1, dx, dy)
+            new = source & ~blocked & (steps < 0)
+            if new.any():
+                grown = True
+                steps[new] = distance
+                way[new] = direction if distance == 1 else _shifted(way, dx, dy)[new]
+        if not grown:
+            break
+    span = np.arange(-reach, reach + 1)
+    left = np.abs(delta[rows, 0, None, None] - span[None, :, None])
+    left = left + np.abs(delta[rows, 1, None, None] - span[None, None, :])
+    score = np.where(steps >= 0, left * (side * side) + steps, BIG).reshape(len(rows), side * side)
+    best = score.argmin(axis=1)
+    chosen = np.zeros(len(sense), dtype=np.int64)
+    better = score[np.arange(len(rows)), best] // (side * side) < np.abs(delta[rows]).sum(axis=1)
+    chosen[rows] = np.where(
+        better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0
+    )
+    return chosen, np.where(going, first, 0)
+
+
+def _direction(steps: np.ndarray) -> np.ndarray:
+    """The direction index of each unit step ``(k, 2)``."""
+    return (steps[:, None, :] == STEPS[None, 1:, :]).all(axis=2).argmax(axis=1) + 1
+
+
+def _shifted(grid: np.ndarray, dx: int, dy: int) -> np.ndarray:
+    """`grid` ``(k, w, w)`` moved by one cell ``(dx, dy)``, filled with zeros where it came
+    from outside."""
+    out = np.zeros_like(grid)
+    w = grid.shape[1]
+    xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
+    ys, yd = (slice(0, w - dy), slice(dy, w)) if dy >= 0 else (slice(-dy, w), slice(0, w + dy))
+    out[:, xd, yd] = grid[:, xs, ys]
+    return out
+
+
+def _go_round(
+    memory: Memory,
+    delta: np.ndarray,
+    preferred: np.ndarray,
+    first: np.ndarray,
+    occupied: np.ndarray,
+    ready: np.ndarray,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Moves of robots on their way, going round what blocks them like a bug algorithm: after
+    `PATIENCE` steps blocked, a robot steps sideways (toward the goal if it lies off to one
+    side, else a random side) and keeps that way until the way it was blocked in is free,
+    turning back when the side is blocked too. A detour ends too once that way no longer
+    leads to the goal (a trade changed it): one robot kept going round for a way that led
+    nowhere for hundreds of steps."""
+    rows = np.arange(len(first))
+    memory.detour[(STEPS[memory.blocked_way] * delta).sum(axis=1) <= 0] = 0
+    blocked = ready & (preferred == 0) & (first > 0)
+    memory.waited = np.where(blocked & (memory.detour == 0), memory.waited + 1, 0)
+    start = blocked & (memory.waited > PATIENCE)
+    off = np.where(first <= 2, delta[:, 1], delta[:, 0])  # < 0: the side numbered higher
+    coin = rng.random(len(first)) < 0.5
+    sideways = np.where(first <= 2, 3, 1) + np.where(off == 0, coin, off < 0)
+    memory.blocked_way = np.where(start, first, memory.blocked_way)
+    memory.detour = np.where(start, sideways, memory.detour)
+    memory.waited[start] = 0
+    on_detour = ready & (memory.detour > 0)
+    way, side = memory.blocked_way, memory.detour
+    clear = ~occupied[rows, way]
+    onward = ~occupied[rows, side]
+    memory.detour = np.where(on_detour & ~clear & ~onward, REVERSE[side], memory.detour)
+    moves = np.where(on_detour, np.where(clear, way, np.where(onward, side, 0)), preferred)
+    memory.detour[on_detour & clear] = 0
+    memory.detour[~ready & (preferred == 0) & (first == 0)] = 0
+    return np.where(ready, moves, 0)
+
+
+def _choose_partner(
+    sense: Perception,
+    memory: Memory,
+    preferred: np.ndarray,
+    target: np.ndarray,
+    seeking: np.ndarray,
+    news: np.ndarray,
+    news_hops: np.ndarray,
+    rested: np.ndarray,
+) -> np.ndarray:
+    """The neighbour each robot wants to trade goals with next step (its number), or -1: one
+    that shortens their summed distance, one at rest in its way (robots that each wait for
+    the next one's cell, in a ring, trade their way out of it), or (a robot without a goal,
+    see `PUSH_HOPS`) one resting in its way nearer an open cell, which gives up its cell and
+    goes on toward the open one. A trade that shortens the summed distance is agreed with a
+    neighbour on the move too (both hold still for it): two robots that met head-on in a
+    corridor each stepped aside for the other, in step, and never once both stood still to
+    trade. A robot never trades for a goal it knows a third robot rests on (see
+    `_held_twice`)."""
+    me, msg = sense.owner, sense.message
+    talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
+    talk &= memory.localised[me] & sense.ready[me]
+    still = msg[:, STAYS] == 1
+    my_has, their_has = memory.has_goal[me], msg[:, HAS] == 1
+    my_cell, their_cell = memory.goal[me], msg[:, GX : GY + 1]
+    mine, theirs = memory.frame[me], msg[:, X : Y + 1]
+
+    def apart(where: np.ndarray, goal_at: np.ndarray, has: np.ndarray) -> np.ndarray:
+        return np.where(has, np.abs(where - goal_at).sum(axis=1), 0)
+
+    now = apart(mine, my_cell, my_has) + apart(theirs, their_cell, their_has)
+    traded = apart(mine, their_cell, their_has) + apart(theirs, my_cell, my_has)
+    gain = now - traded
+    asked = msg[:, WANTS] == sense.number[me]
+    toward = target[me] - mine
+    blocked = (my_has | seeking[me]) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
+    resting_there = (theirs == their_cell).all(axis=1) & their_has
+    in_the_way = blocked & (np.abs(theirs - mine).sum(axis=1) == 1)
+    in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
+    their_news = msg[:, OPEN_HOPS]
+    push = in_the_way & resting_there & ~my_has & (their_news <= PUSH_HOPS)
+    pushed_on = memory.gave & (memory.since_trade < TABU) & (memory.given == memory.frame).all(1)
+    pushed_on = pushed_on[me]  # out of the cell it stands on: the push goes on down the chain
+    push &= (memory.stuck > STUCK)[me] | pushed_on
+    pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
+    open_at = news[me]
+    nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)
+    pushed &= (news_hops[me] <= PUSH_HOPS) & nearer
+    fair = (gain == 0) & (asked | in_the_way)
+    score = np.where(gain > 0, 2 * gain + asked, np.where(still & (fair | push | pushed), 1, 0))
+    same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
+    again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
+    held = their_has & ~resting_there & np.isin(_key(me, their_cell), rested)
+    score = np.where(talk & ~same & ~again & ~held, score, 0)
+    best = _best_per_robot(len(sense), me, -score, score > 0)
+    wants = np.full(len(sense), -1, dtype=np.int64)
+    wants[best >= 0] = msg[best[best >= 0], NUMBER]
+    return wants
+
+
+def _trade(sense: Perception, memory: Memory) -> None:
+    """Robots that wanted each other last step, and hear each other now, swap goals."""
+    me, msg = sense.owner, sense.message
+    mutual = sense.heard & sense.kin & ~sense.seed & (memory.wants[me] >= 0)
+    mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
+    memory.gave[me[mutual]] = memory.has_goal[me[mutual]]
+    memory.given[me[mutual]] = memory.goal[me[mutual]]
+    memory.has_goal[me[mutual]] = msg[mutual, HAS] == 1
+    memory.goal[me[mutual]] = msg[mutual, GX : GY + 1]
+    memory.detour[me[mutual]] = 0  # a detour for the old goal
+    memory.came[me[mutual]] = 0  # the way back may lead to the new one
+    memory.since_trade += 1
+    memory.partner[me[mutual]] = msg[mutual, NUMBER]
+    memory.since_trade[me[mutual]] = 0
+
+
+def _roam(
+    memory: Memory, occupied: np.ndarray, roaming: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
+    """Moves of robots that hear of no localised robot: straight on until blocked (a wall
+    shows as a move that failed), then a new random way. A straight walk crosses the arena in
+    its width; a random walk needs its area squared, which left small swarms in big arenas
+    searching for tens of thousands of steps."""
+    rows = np.flatnonzero(roaming)
+    way = memory.roam[rows]
+    turn = (way == 0) | occupied[rows, way] | (rng.random(len(rows)) < 0.02)
+    way[turn] = _random_free(occupied[rows[turn]], rng)
+    memory.roam[rows] = way
+    return way
+
+
+def _random_free(occupied: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A random direction whose cell is free for each robot, or 0 if none is."""
+    noise = rng.random(occupied.shape)
+    noise[:, 0] = -1.0
+    noise[occupied] = -1.0
+    choice = noise.argmax(axis=1)
+    return np.where(noise.max(axis=1) > 0, choice, 0)

@@ -1,0 +1,115 @@
+"""Shortest ways round a shape, as a robot that knows the shape's bitmap can work them out.
+
+A local program plans over the few cells its robot senses, and a formed shape is an obstacle
+far wider than that: a robot on the wrong side of an arm, whose target faces the shape's bay,
+walked back and forth along the arm for a thousand steps. Every robot knows the bitmap and
+the seeds in its frame, so it can find the way round them alone: the path to its target that
+crosses the fewest shape cells (formed ones let a robot through only by trading), and of
+those the shortest. Robots in the way are left to the local planner.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Blueprint
+from swarmshape.core.shape import SEED_CELLS
+
+MARGIN = 4
+"""Cells of outside kept round the shape's box: room to walk round its rim. A robot farther
+out walks straight in until it is within the margin."""
+
+
+def waypoints(
+    blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, target: np.ndarray, ahead: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """For robots outside their shape, the cell `ahead` steps along the way round the shape to
+    each one's `target`, and whether there is such a way (none for a robot beyond the margin
+    round the shape, or for a target the seeds wall in)."""
+    found = np.zeros(len(frame), dtype=bool)
+    out = target.copy()
+    for group in np.unique(groups):
+        rows = np.flatnonzero(groups == group)
+        low, size = _box(blueprint, int(group))
+        ends, which = np.unique(target[rows], axis=0, return_inverse=True)
+        fields = np.stack([_field(blueprint, int(group), x, y) for x, y in ends.tolist()])
+        which = which.reshape(-1)
+        at = frame[rows] - low
+        for _ in range(ahead):
+            here = _distance(fields, which, at, size)
+            best, step = here, np.zeros(len(rows), dtype=np.int64)
+            for direction in range(1, len(STEPS)):
+                there = _distance(fields, which, at + STEPS[direction], size)
+                better = there < best
+                best, step = np.where(better, there, best), np.where(better, direction, step)
+            at = at + STEPS[step]
+        reached = np.isfinite(_distance(fields, which, at, size))
+        found[rows] = reached
+        out[rows[reached]] = at[reached] + low
+    return out, found
+
+
+def _distance(
+    fields: np.ndarray, which: np.ndarray, at: np.ndarray, size: np.ndarray
+) -> np.ndarray:
+    """Each robot's route cost to its target at cells `at` (inf off the box)."""
+    inside = ((at >= 0) & (at < size)).all(axis=1)
+    distance = np.full(len(at), np.inf)
+    distance[inside] = fields[which[inside], at[inside, 0], at[inside, 1]]
+    return distance
+
+
+@functools.lru_cache(maxsize=16)
+def _box(blueprint: Blueprint, group: int) -> tuple[np.ndarray, np.ndarray]:
+    """The low corner and size of the group's shape box (seeds included), with the margin."""
+    cells = np.concatenate([blueprint.cells[group], SEED_CELLS])
+    low = cells.min(axis=0) - MARGIN
+    return low, cells.max(axis=0) + MARGIN + 1 - low
+
+
+@functools.lru_cache(maxsize=16)
+def _moves(blueprint: Blueprint, group: int) -> tuple[csr_matrix, np.ndarray]:
+    """The moves a route may take, as a weighted graph over the box's cells, reversed (from
+    the target out): a step onto a free cell costs 1, onto a shape cell more than any way
+    round through free cells, so a route crosses as few shape cells as it can. Seeds are
+    never crossed."""
+    low, size = _box(blueprint, group)
+    shape = np.zeros(size, dtype=bool)
+    cells = blueprint.cells[group] - low
+    shape[cells[:, 0], cells[:, 1]] = True
+    seeds = np.zeros(size, dtype=bool)
+    seeds[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
+    free = ~shape & ~seeds
+    index = np.arange(shape.size).reshape(size)
+    sources, sinks, weights = [], [], []
+    cost = np.where(free, 1.0, float(shape.size)).ravel()
+    for dx, dy in ((1, 0), (0, 1)):
+        a = index[: size[0] - dx, : size[1] - dy].ravel()
+        b = index[dx:, dy:].ravel()
+        for one, other in ((a, b), (b, a)):
+            ok = ~seeds.ravel()[other] & ~seeds.ravel()[one]
+            sources.append(one[ok])
+            sinks.append(other[ok])
+            weights.append(cost[one[ok]])  # a robot steps from `other` into `one`
+    sources, sinks = np.concatenate(sources), np.concatenate(sinks)
+    matrix = coo_matrix((np.concatenate(weights), (sources, sinks)), shape=(shape.size,) * 2)
+    return matrix.tocsr(), cost
+
+
+@functools.lru_cache(maxsize=512)  # a field is 8 bytes a cell: 92 MB at 10,000 robots
+def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
+    """The cost of a route to frame cell ``(x, y)`` from each cell of the box, counting the
+    step into that cell too, so a route goes to the neighbour of least cost (inf: no route,
+    or the target is off the box)."""
+    low, size = _box(blueprint, group)
+    local = np.array([x, y]) - low
+    if not ((local >= 0) & (local < size)).all():
+        return np.full(tuple(size), np.inf)
+    graph, cost = _moves(blueprint, group)
+    start = int(local[0] * size[1] + local[1])
+    return (dijkstra(graph, indices=start) + cost).reshape(tuple(size))

@@ -1,0 +1,217 @@
+"""Faults: each kind under each strategy heals (or re-forms smaller) without overlaps, the same
+way for the same seed, and a run saved mid-fault resumes byte for byte."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+from swarmshape.check import InvariantWatch
+from swarmshape.core.faults import (
+    FaultError,
+    FaultEvent,
+    Faults,
+    events_from_values,
+    parse_event,
+    parse_region,
+)
+from swarmshape.core.metrics import run_metrics
+from swarmshape.core.states import LOST, SETTLED, STALLED
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import build_world
+from swarmshape.io.scenario import load_scenario
+from swarmshape.runs import Runner, configure, resume, save
+from swarmshape.strategies import available, create
+from tests.conftest import SHAPES, grid_from, world_of
+
+STRATEGIES = sorted(available())
+BLOCK = grid_from("""
+.######.
+########
+########
+########
+.######.
+""")
+KINDS = {
+    "random": (FaultEvent(0, "remove", 0.2),),
+    "rectangle": (FaultEvent(0, "remove", 1.0, (0, 0, 1, 1)),),  # placed on the shape below
+    "disc": (FaultEvent(0, "remove", 1.0, (0, 0, 2)),),
+    "stall": (FaultEvent(0, "stall", 0.1),),
+    "number": (FaultEvent(0, "remove", 5),),
+}
+
+
+def schedule(kind: str, world, step: int) -> tuple[FaultEvent, ...]:
+    """The kind's events at `step`, regions placed over the middle of the shape."""
+    (event,) = KINDS[kind]
+    low = world.targets.min(axis=0)
+    if event.region is not None and len(event.region) == 4:
+        event = FaultEvent(step, "remove", 1.0, (int(low[0]) + 2, int(low[1]) + 1, 3, 3))
+    elif event.region is not None:
+        event = FaultEvent(step, "remove", 1.0, (int(low[0]) + 4, int(low[1]) + 2, 2))
+    else:
+        event = FaultEvent(step, event.kind, event.amount)
+    return (event,)
+
+
+@functools.cache
+def formed_at(strategy: str, spares: int, seed: int) -> int:
+    """The step at which the block first formed without faults: when the faults strike."""
+    swarm = Swarm(world_of(BLOCK, BLOCK.sum() + spares), create(strategy), seed)
+    Runner(swarm, max_steps=20_000).finish()
+    assert swarm.complete
+    return swarm.step_count
+
+
+def watched_run(strategy: str, kind: str, spares: int, seed: int = 5):
+    world = world_of(BLOCK, BLOCK.sum() + spares)
+    faults = Faults(schedule(kind, world, formed_at(strategy, spares, seed)))
+    swarm = Swarm(world, create(strategy), seed, faults=faults)
+    watch = InvariantWatch()
+    Runner(swarm, [watch], max_steps=20_000).finish()
+    return swarm, watch
+
+
+@pytest.mark.parametrize("spares", [0, 8])
+@pytest.mark.parametrize("kind", sorted(KINDS))
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_each_fault_kind_heals_under_each_strategy(strategy, kind, spares):
+    swarm, watch = watched_run(strategy, kind, spares)
+    assert watch.problems == []
+    assert swarm.overlap_total == 0
+    (entry,) = swarm.faults.log
+    assert entry["robots"] > 0
+    assert swarm.complete, "every cell the survivors can reach is filled again"
+    assert entry["recovered_at"] is not None
+    assert entry["recovery_steps"] == entry["recovered_at"] - entry["step"]
+    metrics = run_metrics(swarm)
+    lost = int((swarm.state == LOST).sum())
+    assert metrics["robots_lost"] == lost == (0 if kind == "stall" else entry["robots"])
+    assert metrics["robots_stalled"] == int((swarm.state == STALLED).sum())
+    mobile = int(((swarm.state != LOST) & (swarm.state != STALLED)).sum())
+    if mobile < int(BLOCK.sum()) - metrics["cells_lost_to_stalls"]:
+        assert metrics["scale"] < 1, "too few robots: the shape was re-formed smaller"
+    held = swarm.lattice.grid[swarm.world.targets[:, 0], swarm.world.targets[:, 1]]
+    assert (held[swarm.filled] >= 0).all()
+    assert (swarm.state[held[swarm.filled]] == SETTLED).all()
+    again, _ = watched_run(strategy, kind, spares)
+    assert np.array_equal(again.cell, swarm.cell) and again.faults.log == swarm.faults.log
+
+
+def test_too_few_survivors_re_form_the_shape_smaller_and_say_so():
+    world = world_of(BLOCK)
+    swarm = Swarm(world, create("optimal"), 2, faults=Faults((FaultEvent(80, "remove", 0.3),)))
+    Runner(swarm, max_steps=5000).finish()
+    metrics = run_metrics(swarm)
+    assert swarm.complete and metrics["coverage"] == 1.0
+    assert metrics["scale"] < 1 and metrics["faults"][0]["scale"] == metrics["scale"]
+    assert metrics["targets"] <= world.agents - metrics["robots_lost"]
+
+
+def test_a_removed_robot_leaves_the_lattice_and_its_follower_takes_its_cell():
+    world = world_of(BLOCK, BLOCK.sum() + 4)
+    swarm = Swarm(world, create("optimal"), 1)
+    for _ in range(15):
+        swarm.step()
+    followers = np.flatnonzero(swarm.leader >= 0)
+    assert len(followers), "a train of robots is under way at step 15"
+    leader = swarm.leader[followers[0]]
+    cell = swarm.cell[leader].copy()
+    swarm.fail(np.array([leader]))
+    assert swarm.state[leader] == LOST and swarm.lattice.grid[cell[0], cell[1]] == followers[0]
+    assert swarm.leader[followers[0]] == -1
+    assert not (swarm.lattice.holder == leader).any() and not (swarm.lattice.queued == leader).any()
+    Runner(swarm, max_steps=3000).finish()
+    assert swarm.complete and swarm.overlap_total == 0
+
+
+def test_a_stalled_robot_on_the_shape_is_lost_coverage_that_others_go_around():
+    world = world_of(BLOCK)
+    swarm = Swarm(world, create("greedy"), 4)
+    Runner(swarm, max_steps=3000).finish()
+    middle = np.flatnonzero((swarm.cell == world.targets[len(world.targets) // 2]).all(axis=1))
+    swarm.fail(middle, "stall")
+    assert swarm.complete and swarm.dead.sum() == 1
+    assert run_metrics(swarm)["cells_lost_to_stalls"] == 1
+    assert run_metrics(swarm)["coverage"] == round(1 - 1 / len(world.targets), 6)
+    x, y = swarm.cell[middle[0]]
+    assert swarm.lattice.grid[x, y] == middle[0], "it stays where it stopped"
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_a_run_saved_mid_fault_resumes_byte_for_byte(tmp_path, strategy):
+    config = configure(
+        None,
+        seed=9,
+        strategy=strategy,
+        cells=12,
+        agents=80,
+        failure_rate=0.0005,
+        faults=(FaultEvent(150, "stall", 0.05), FaultEvent(300, "remove", 0.25)),
+    )
+    whole = Runner(_swarm(config), max_steps=40_000).finish()
+    half = Runner(_swarm(config), max_steps=310).finish()
+    save(half, tmp_path / "run.state", config)
+    saved_config, resumed = resume(tmp_path / "run.state")
+    assert saved_config.faults == config.faults and saved_config.failure_rate == 0.0005
+    Runner(resumed, max_steps=40_000).finish()
+    assert run_metrics(resumed) == run_metrics(whole)
+    assert np.array_equal(resumed.positions(), whole.positions())
+    assert len(whole.faults.log) >= 2
+
+
+def _swarm(config):
+    from swarmshape.runs import build
+
+    return build(config)
+
+
+def test_events_parse_from_plain_values_and_text():
+    assert parse_event("0.2@300", "remove", "--fail") == FaultEvent(300, "remove", 0.2)
+    assert parse_event("50@3", "stall", "--stall") == FaultEvent(3, "stall", 50)
+    assert parse_region("1,2,3,4@5") == FaultEvent(5, "remove", 1.0, (1, 2, 3, 4))
+    assert parse_region("1,2,3@5").region == (1, 2, 3)
+    table = [{"step": 4, "kind": "stall", "amount": 0.5}, {"step": 9, "region": [0, 0, 2, 2]}]
+    events = events_from_values(table, "faults")
+    assert events == (FaultEvent(4, "stall", 0.5), FaultEvent(9, "remove", 1.0, (0, 0, 2, 2)))
+    assert events_from_values([e.values() for e in events], "again") == events
+    for bad in ("0.2", "x@3", "0.2@-1", "1.5@3", "0@3", "@3"):
+        with pytest.raises(FaultError):
+            parse_event(bad, "remove", "--fail")
+    for bad in ([{"kind": "remove"}], [{"step": 1, "amont": 1}], "0.2@3", [{"step": True}]):
+        with pytest.raises(FaultError):
+            events_from_values(bad, "faults")
+
+
+def test_a_run_does_not_end_before_its_last_fault():
+    world = world_of(BLOCK, BLOCK.sum() + 6)
+    swarm = Swarm(world, create("optimal"), 1, faults=Faults((FaultEvent(400, "remove", 3),)))
+    Runner(swarm, max_steps=5000).finish()
+    assert swarm.step_count > 400 and swarm.faults.log[0]["step"] == 400
+    lost = np.flatnonzero(swarm.state == LOST)
+    assert len(lost) == 3 and not np.isin(swarm.lattice.holder, lost).any()
+    holders = swarm.lattice.grid[swarm.lattice.grid >= 0]
+    assert len(np.unique(holders)) == world.agents - 3, "every robot present holds its cell"
+
+
+@pytest.mark.parametrize("kind", ["remove", "stall"])
+def test_a_fault_that_takes_every_robot_ends_the_run_unformed(kind):
+    """Nothing can change once no robot can move: the run stops at once, and a shape whose
+    every cell is lost to stalled robots does not count as formed."""
+    world = world_of(BLOCK, BLOCK.sum())
+    swarm = Swarm(world, create("optimal"), 1, faults=Faults((FaultEvent(3, kind, 1.0),)))
+    Runner(swarm, max_steps=5000).finish()
+    assert swarm.stranded and not swarm.complete
+    assert swarm.step_count < 20 and run_metrics(swarm)["steps"] is None
+
+
+def test_a_group_left_with_no_robot_that_can_move_ends_the_run_once_the_other_has_formed():
+    world = build_world(list(load_scenario(SHAPES / "two-squares.toml").groups))
+    swarm = Swarm(world, create("optimal"), 1)
+    swarm.fail(np.flatnonzero(swarm.group == 0), "stall")
+    assert not swarm.stranded, "the other group can still form"
+    Runner(swarm, max_steps=5000).finish()
+    assert swarm.stranded and not swarm.complete and swarm.step_count < 5000
+    assert swarm.completed_at[0] is None and swarm.completed_at[1] is not None

@@ -1,0 +1,68 @@
+"""Routes round a known shape: shortest, outside the shape where they can be, and through as
+few of its cells as they must."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from swarmshape.core.perception import Blueprint
+from swarmshape.strategies import routes
+from tests.conftest import grid_from
+
+
+def blueprint_of(text: str) -> Blueprint:
+    """The shape drawn in `text` ('#' ink), its first row at frame y = 0."""
+    grid = grid_from(text).T  # rows of text are y, columns x
+    return Blueprint.of([np.argwhere(grid)])
+
+
+def walk(blueprint: Blueprint, start, target, limit: int = 200) -> list[tuple[int, int]]:
+    """Cells visited by following one-step waypoints from `start` to `target`."""
+    at, path = np.array([start]), [tuple(start)]
+    for _ in range(limit):
+        cell, found = routes.waypoints(blueprint, np.zeros(1, int), at, np.array([target]), 1)
+        assert found[0]
+        at = cell
+        path.append(tuple(int(v) for v in cell[0]))
+        if path[-1] == tuple(target):
+            return path
+    raise AssertionError(f"no arrival in {limit} steps: {path[-5:]}")
+
+
+U = """
+##...##
+##...##
+##...##
+#######
+"""
+
+
+def test_a_route_goes_round_the_shape_and_ends_on_its_target():
+    shape = blueprint_of(U)
+    inside = {tuple(c) for c in shape.cells[0].tolist()}
+    start, target = (3, 5), (1, 1)  # below the U's floor; the target faces only its bay
+    path = walk(shape, start, target)
+    assert all(cell not in inside for cell in path[:-1])
+    steps = [abs(a[0] - b[0]) + abs(a[1] - b[1]) for a, b in itertools.pairwise(path)]
+    assert steps == [1] * len(steps)
+    # right: over to x 7, up to y -1, back to x 2, down the bay to y 1, and in; the seeds (an
+    # L at (-1..1, -1) and (-1, 0)) make the way round the left arm two steps longer
+    assert len(path) - 1 == 4 + 6 + 5 + 2 + 1
+
+
+def test_a_route_into_a_walled_in_cell_crosses_the_fewest_shape_cells():
+    shape = blueprint_of("#####\n#####\n#####\n#####\n#####")
+    inside = {tuple(c) for c in shape.cells[0].tolist()}
+    path = walk(shape, (8, 2), (2, 2))  # the centre of a 5 by 5 block, from the east
+    assert sum(cell in inside for cell in path) == 3  # (4, 2), (3, 2) and the target
+    assert len(path) - 1 == 6
+
+
+def test_a_robot_far_off_the_map_has_no_route():
+    shape = blueprint_of(U)
+    _, found = routes.waypoints(
+        shape, np.zeros(1, int), np.array([[60, 60]]), np.array([[0, 0]]), 3
+    )
+    assert not found[0]
