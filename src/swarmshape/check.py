@@ -11,14 +11,14 @@ fault opened it again).
 
 from __future__ import annotations
 
+
 import hashlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.audit import overlapping_pairs
-from swarmshape.core.grid import fill_holes
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
@@ -122,7 +122,7 @@ def check_strategy(
     report = Report(cls.name, runs)
     shapes = np.random.default_rng(seed)
     for index in range(runs):
-        world = random_world(shapes, holes=getattr(cls, "forms_holes", True))
+        world = random_world(shapes, solid=getattr(cls, "grows_from_seeds", False))
         run_seed = int(shapes.integers(2**32))
         where = (
             f"shape {index} ({len(world.targets)} cells, {world.agents} robots, seed {run_seed})"
@@ -150,16 +150,17 @@ def watch_run(world: World, cls: type[Strategy], seed: int, max_steps: int) -> I
     return watch
 
 
-def random_world(rng: np.random.Generator, holes: bool = True) -> World:
-    """A small random shape with a few robots too many or too few, in a roomy arena; its holes
-    filled unless `holes` (for a program that declares it cannot form them)."""
+def random_world(rng: np.random.Generator, solid: bool = False) -> World:
+    """A small random shape with a few robots too many or too few, in a roomy arena (keeping
+    the auto arena's margin round it, so robots can pass round the seeds); only its
+    `Shape.solid` part if `solid` (for a program that grows from the seeds)."""
     height, width = rng.integers(3, 7, size=2)
     grid = rng.random((height, width)) < rng.uniform(0.3, 0.9)
     grid[rng.integers(height), rng.integers(width)] = True
-    if not holes:
-        grid = fill_holes(grid)
-    agents = max(1, int(grid.sum()) + int(rng.integers(-3, 7)))
-    spec = GroupSpec("check", Shape(grid), (58, 111, 216), agents)
+    shape = Shape(grid).solid() if solid else Shape(grid)
+    agents = max(1, shape.count + int(rng.integers(-3, 7)))
+    spec = GroupSpec("check", shape, (58, 111, 216), agents)
     auto = build_world([spec])
     room = int(rng.integers(0, 12))
+    spec = replace(spec, pose=auto.groups[0].pose)
     return build_world([spec], (auto.size[0] + room, auto.size[1] + room // 2))

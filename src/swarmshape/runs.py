@@ -25,7 +25,6 @@ import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.faults import FaultEvent, Faults, check_rate, events_from_values
-from swarmshape.core.grid import has_hole
 from swarmshape.core.local import Program
 from swarmshape.core.motion import Limits
 from swarmshape.core.perception import Senses
@@ -226,13 +225,14 @@ def load_world(config: RunConfig) -> World:
         )
     if strategies.is_code(config.strategy):  # user code is loaded once, when the run starts
         return world
-    if getattr(strategies.get(config.strategy), "forms_holes", True):
+    if not getattr(strategies.get(config.strategy), "grows_from_seeds", False):
         return world
     for group in world.groups:
-        if has_hole(group.shape.grid):
+        if not group.shape.is_solid:
             warnings.warn(
-                f"shape {group.name!r} has a hole, and {config.strategy} cannot form holes "
-                "(robots join the edge of what is built, so a hole is filled or left outside)",
+                f"shape {group.name!r} has a hole or a part apart from its seeds, and "
+                f"{config.strategy} cannot form those (robots join only the edge of what is "
+                "built, outward from the seeds)",
                 ShapeWarning,
                 stacklevel=2,
             )

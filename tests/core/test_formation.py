@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmshape.check import InvariantWatch
-from swarmshape.core.grid import fill_holes, has_hole
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import State
 from swarmshape.core.swarm import Swarm
@@ -35,19 +34,19 @@ def shipped(name: str) -> np.ndarray:
     return load_grid(SHAPES / name, cells=cells)
 
 
-def forms_holes(strategy: str) -> bool:
-    """What the strategy declares (a program that cannot form holes sets it False)."""
-    return getattr(available()[strategy], "forms_holes", True)
+def grows_from_seeds(strategy: str) -> bool:
+    """What the strategy declares (a program that can form only solid shapes sets it)."""
+    return getattr(available()[strategy], "grows_from_seeds", False)
 
 
 def shipped_with(strategies: list[str]) -> list[tuple[str, str]]:
-    """Every shipped shape with each of `strategies`, but no shape with a hole for a strategy
-    that declares it cannot form one."""
+    """Every shipped shape with each of `strategies`, but only solid shapes (`Shape.solid`)
+    for a strategy that grows from the seeds."""
     return [
         (name, strategy)
         for name in PAPER_SHAPES + DRAWN_SHAPES
         for strategy in strategies
-        if forms_holes(strategy) or not has_hole(shipped(name))
+        if not grows_from_seeds(strategy) or Shape(shipped(name)).is_solid
     ]
 
 
@@ -95,7 +94,7 @@ def test_a_local_program_leaves_spare_robots_off_the_formed_shape(name, strategy
     assert swarm.filled.all()
 
 
-@pytest.mark.parametrize("strategy", LOCAL)
+@pytest.mark.parametrize("strategy", [name for name in LOCAL if not grows_from_seeds(name)])
 def test_a_goal_held_twice_never_costs_the_formed_shape_a_cell(strategy):
     """Hypothesis found this run: a spare robot claimed a cell whose holder was out of range,
     traded the second copy of that goal into the formed shape, and a robot there left its
@@ -170,8 +169,8 @@ def test_random_bitmaps_form_deterministically_under_every_strategy(bits, strate
     grid = np.array(bits).reshape(5, 6)
     if not grid.any():
         grid[2, 3] = True
-    if not forms_holes(strategy):
-        grid = fill_holes(grid)
+    if grows_from_seeds(strategy):
+        grid = Shape(grid).solid().grid
     agents = max(1, int(grid.sum()) + spare)
     runs = [formed(make_swarm(grid, agents=agents, seed=seed, strategy=strategy)) for _ in "ab"]
     assert runs[0].step_count == runs[1].step_count

@@ -81,3 +81,32 @@ def test_a_shape_from_cells_keeps_where_they_are():
     shape = Shape.from_cells(cells)
     assert shape.origin == (-2, 1) and shape.grid.shape == (3, 3)
     assert sorted(shape.cells.tolist()) == sorted(cells.tolist())
+
+
+def test_the_seeds_sit_beside_the_first_cell_of_the_top_row():
+    star_tip = Shape(grid_from("..#.. .###. #####"))
+    assert star_tip.origin == (-2, 0)
+    assert [0, 0] in star_tip.cells.tolist()
+    assert Shape(grid_from("##. .##")).origin == (0, 0)
+
+
+def test_the_solid_part_fills_what_the_seeds_enclose_and_drops_what_they_cannot_reach():
+    # a notch under the seeds' arm becomes a hole once the row below is built
+    notched = Shape(grid_from("#.# ###"))
+    assert not notched.is_solid
+    assert sorted(notched.solid().cells.tolist()) == sorted(
+        [[x, y] for x in range(3) for y in range(2)]
+    )
+    apart = Shape(grid_from("##... ##..# ....#"))
+    assert sorted(apart.solid().cells.tolist()) == [[0, 0], [0, 1], [1, 0], [1, 1]]
+    ring = Shape(grid_from("### #.# ###"))
+    assert ring.solid().count == 9
+    assert Shape(grid_from("### #.. ###")).is_solid
+
+
+def test_a_solid_shape_stays_solid_when_fitted_to_fewer_robots():
+    shape = Shape(grid_from("..#... .#..#. .#..#. ###### ###..."))
+    assert shape.is_solid  # its two tips touch the seeds
+    for agents in range(1, shape.count):  # shrunk to 5 cells across, a plain resample is not
+        fitted = shape.fitted(agents)
+        assert fitted.is_solid and fitted.count <= agents

@@ -64,7 +64,8 @@ def test_a_shape_with_a_hole_is_warned_about_in_one_line():
         warnings.simplefilter("always")
         build(config)
     found = [w for w in caught if issubclass(w.category, ShapeWarning)]
-    assert len(found) == 1 and "cannot form holes" in str(found[0].message)
+    assert len(found) == 1 and "has a hole" in str(found[0].message)
+    assert "self-assembly cannot form those" in str(found[0].message)
     assert "\n" not in str(found[0].message)
 
 

@@ -62,20 +62,3 @@ def _box_average(image: np.ndarray, out: int, axis: int) -> np.ndarray:
     for tap in taps:
         total += moved[..., np.minimum(first + tap, size - 1)] * weight[:, tap]
     return np.moveaxis(total.astype(np.float32), -1, axis)
-
-
-def has_hole(grid: np.ndarray) -> bool:
-    """Whether the grid's empty cells enclose a region the outside cannot reach by steps
-    across cell sides (a robot walking round the shape never gets in)."""
-    from scipy import ndimage
-
-    empty = np.pad(~np.asarray(grid, dtype=bool), 1, constant_values=True)
-    _, regions = ndimage.label(empty)
-    return regions > 1
-
-
-def fill_holes(grid: np.ndarray) -> np.ndarray:
-    """The grid with every hole (see `has_hole`) filled in."""
-    from scipy import ndimage
-
-    return ndimage.binary_fill_holes(np.asarray(grid, dtype=bool))

@@ -87,8 +87,10 @@ class Program:
     states: ClassVar[tuple[str, ...]] = ()
     """Names of the values of ``memory.state``, if the program keeps one (the viewer colours
     robots by it)."""
-    forms_holes: ClassVar[bool] = True
-    """False if the program cannot form a shape with a hole (checks and tests then fill them)."""
+    grows_from_seeds: ClassVar[bool] = False
+    """True if the program builds outward from the seeds, so it can form only a shape's
+    `Shape.solid` part (one piece with its seeds, no holes): checks and tests then give it
+    solid shapes, and a run warns about any other."""
     shown: ClassVar[str | None] = None
     """The integer memory slot the viewer can print on each robot (a gradient, a hop count), so
     a program's field can be seen without a debugger; values 0 to 998 are printed, others

@@ -54,11 +54,17 @@ def _turn(cells: np.ndarray, quarter_turns: int) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class Shape:
     """A boolean grid, the scale it was shrunk to (1.0 as drawn), and where its top-left cell
-    sits in the seed frame (a painted shape may start anywhere around the seeds)."""
+    sits in the seed frame (a painted shape may start anywhere around the seeds). Unless told,
+    the seeds sit beside the first cell of the top row, so the shape touches them even when its
+    top-left corner is empty (a star's): a swarm that grows from its seeds can then reach it."""
 
     grid: np.ndarray
     scale: float = 1.0
-    origin: tuple[int, int] = (0, 0)
+    origin: tuple[int, int] = None  # type: ignore[assignment]  # None: beside the seeds
+
+    def __post_init__(self) -> None:
+        if self.origin is None:
+            object.__setattr__(self, "origin", _beside_seeds(self.grid))
 
     @classmethod
     def from_cells(cls, cells: np.ndarray) -> Shape:
@@ -75,6 +81,33 @@ class Shape:
         rows, cols = np.nonzero(self.grid)
         return np.column_stack([cols, rows]).astype(np.int64) + np.array(self.origin)
 
+    def solid(self) -> Shape:
+        """The part of this shape a swarm that grows outward from its seeds can form: the cells
+        joined to the seeds by cell sides, with every hole that they and the seeds enclose
+        filled (Rubenstein et al.'s robots join only the edge of what is built). The shape
+        itself if it touches no seed."""
+        from scipy import ndimage
+
+        cells = np.concatenate([SEED_CELLS, self.cells])
+        low = cells.min(axis=0) - 1
+        size = cells.max(axis=0) - low + 2
+        grid = np.zeros((size[1], size[0]), dtype=bool)
+        grid[cells[:, 1] - low[1], cells[:, 0] - low[0]] = True
+        pieces, _ = ndimage.label(grid)
+        seeded = pieces == pieces[SEED_CELLS[0, 1] - low[1], SEED_CELLS[0, 0] - low[0]]
+        built = ndimage.binary_fill_holes(seeded)
+        built[SEED_CELLS[:, 1] - low[1], SEED_CELLS[:, 0] - low[0]] = False
+        rows, cols = np.nonzero(built)
+        if not len(rows):
+            return self
+        solid = Shape.from_cells(np.column_stack([cols, rows]) + low)
+        return Shape(solid.grid, self.scale, solid.origin)
+
+    @property
+    def is_solid(self) -> bool:
+        """Whether the shape is all its `solid` part."""
+        return np.array_equal(self.solid().cells, self.cells)
+
     @property
     def count(self) -> int:
         return int(self.grid.sum())
@@ -83,16 +116,27 @@ class Shape:
         """The largest rescaled copy whose cell count does not exceed `agents`.
 
         The paper's answer to too few robots: form the same shape, smaller. The scale is the
-        ratio of long sides, so a user can read how much was lost.
+        ratio of long sides, so a user can read how much was lost. A solid shape stays solid
+        (shrinking may close a notch into a hole or cut off a thin tip).
         """
         if agents < 1:
             raise ShapeError("at least one agent is needed to form a shape")
         if self.count <= agents:
             return self
+        origin = None if self.origin == _beside_seeds(self.grid) else self.origin
+        solid = self.is_solid
         long_side = max(self.grid.shape)
         fraction = self.grid.astype(np.float64)
         for side in range(long_side - 1, 0, -1):
-            smaller = crop(resample(fraction, side))
-            if 0 < smaller.sum() <= agents:
-                return Shape(smaller, self.scale * side / long_side, self.origin)
-        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)
+            smaller = Shape(crop(resample(fraction, side)), self.scale * side / long_side, origin)
+            if solid:
+                smaller = smaller.solid()
+            if 0 < smaller.count <= agents:
+                return smaller
+        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, origin)
+
+
+def _beside_seeds(grid: np.ndarray) -> tuple[int, int]:
+    """The origin that puts the first cell of the grid's top filled row at frame cell (0, 0)."""
+    rows, cols = np.nonzero(grid)
+    return (-int(cols[0]), -int(rows[0])) if len(rows) else (0, 0)

@@ -94,12 +94,10 @@ TOUCHING = np.isin(np.arange(25), NEAR8)
 @register
 class SelfAssembly(Program):
     name = "self-assembly"
-    description = (
-        "local: gradient, localisation and edge-following (Rubenstein, Cornejo & Nagpal 2014)"
-    )
+    description = "gradient, localisation and edge-following (Rubenstein, Cornejo & Nagpal 2014)"
     message_size = 7
     states = STATES
-    forms_holes = False
+    grows_from_seeds = True
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
         "gradient": Slot(np.int64, INFINITE),
