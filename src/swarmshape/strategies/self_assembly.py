@@ -85,6 +85,8 @@ AROUND = np.array([[_slot(DIRECTION[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 
                    17, 18)] for d in range(5)])  # fmt: skip
 """``[d]``: the window slots of the 8 cells around the cell one step in direction d (the
 robot's own cell among them for d > 0)."""
+BORDER = (np.abs(WINDOW) == 2).any(axis=1)
+"""Per window slot, whether it is on the window's outer ring."""
 NEAR8 = np.array([6, 7, 8, 11, 13, 16, 17, 18])
 """The window slots of the 8 cells around the robot."""
 TOUCHING = np.isin(np.arange(25), NEAR8)
@@ -446,7 +448,13 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     layer_end &= mine < INFINITE
     next_cell = cell + DIRECTION[choice]
     leaves = ~sense.blueprint.contains(sense.group, next_cell) | (choice == 0)
-    join = inside & (layer_end | leaves)
+    # never seal a pocket of the shape: step into it instead (see `_pocket`)
+    sealed = np.zeros(len(choice), dtype=np.int64)
+    for d in range(1, 5):
+        pocket = _pocket(view, d) & sense.blueprint.contains(sense.group, cell + DIRECTION[d])
+        sealed[(sealed == 0) & pocket] = d
+    join = inside & (layer_end | leaves) & (sealed == 0)
+    way = np.where(inside & (layer_end | leaves) & (sealed > 0), sealed, way)
     state[join] = JOINED
     memory.gradient[join] = mine[join]
     blocked = view.taken[rows, _slot(DIRECTION[way])]
@@ -466,6 +474,27 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     memory.heading[found] = heading[found]
     memory.travelled[found] = 0
     moves[found] = heading[found]
+
+
+def _pocket(view: _View, d: int) -> np.ndarray:
+    """Whether the free cells one step in direction `d` form a pocket that the built
+    structure and the robot itself wall in, within its 5x5 window: if the robot stopped here,
+    no robot could ever reach them (a lattice's dead ends, which the paper's round robots on
+    a continuous floor do not meet)."""
+    a = len(view.ready)
+    free = ~view.stationary.reshape(a, 5, 5)
+    free[:, 2, 2] = False
+    reach = np.zeros((a, 5, 5), dtype=bool)
+    reach[:, 2 + DIRECTION[d, 1], 2 + DIRECTION[d, 0]] = True
+    reach &= free
+    for _ in range(8):  # the 3x3 inside the ring holds at most 8 cells besides the robot's
+        grown = reach.copy()
+        grown[:, 1:, :] |= reach[:, :-1, :]
+        grown[:, :-1, :] |= reach[:, 1:, :]
+        grown[:, :, 1:] |= reach[:, :, :-1]
+        grown[:, :, :-1] |= reach[:, :, 1:]
+        reach = grown & free
+    return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
 
 def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
