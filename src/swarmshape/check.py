@@ -11,7 +11,6 @@ fault opened it again).
 
 from __future__ import annotations
 
-
 import hashlib
 from dataclasses import dataclass, field, replace
 

@@ -227,6 +227,13 @@ def load_world(config: RunConfig) -> World:
         return world
     if not getattr(strategies.get(config.strategy), "grows_from_seeds", False):
         return world
+    if config.faults or config.failure_rate:
+        warnings.warn(
+            f"{config.strategy} does not repair the shape: joined robots never move again, so "
+            "cells that faults empty inside the structure stay empty",
+            ShapeWarning,
+            stacklevel=2,
+        )
     for group in world.groups:
         if not group.shape.is_solid:
             warnings.warn(

@@ -99,5 +99,8 @@ def test_invariants_hold_through_random_faults(strategy, bits, spare, seed, even
     assert watches[0].digest.digest() == watches[1].digest.digest(), "deterministic per seed"
     assert swarms[0].faults.log == swarms[1].faults.log
     able = (swarms[0].state != LOST) & (swarms[0].state != STALLED)
-    if rate == 0 and able.any():  # with none able to move, the run ends unformed (by design)
+    # with none able to move, the run ends unformed (by design); a program that grows from its
+    # seeds never moves a joined robot again, so it cannot heal (see test_faults.py)
+    repairs = not getattr(available()[strategy], "grows_from_seeds", False)
+    if rate == 0 and able.any() and repairs:
         assert swarms[0].complete, "the shape heals, or re-forms smaller, after its faults"

@@ -254,9 +254,11 @@ def _place(specs: list[GroupSpec]) -> list[Group]:
             )
         shape = spec.shape.fitted(agents)
         pose = spec.pose
-        if pose is None:  # side by side, left to right, each seed frame at its shape's corner
-            pose = Pose(next_x + 1, 1)
-            next_x += 1 + shape.grid.shape[1] + GROUP_GAP
+        if pose is None:  # side by side, left to right, each shape with its seeds at (x, 0)+
+            frame = np.concatenate([SEED_CELLS, shape.cells])
+            low, high = frame.min(axis=0), frame.max(axis=0)
+            pose = Pose(next_x - int(low[0]), -int(low[1]))
+            next_x += int(high[0] - low[0]) + 1 + GROUP_GAP
         groups.append(Group.placed(spec.name, spec.colour, shape, pose, agents))
     return groups
 
