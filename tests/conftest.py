@@ -47,16 +47,23 @@ def grid_from(text: str) -> np.ndarray:
     return np.array([[c == "#" for c in row] for row in text.split()], dtype=bool)
 
 
-def world_of(grid: np.ndarray, agents: int | None = None) -> World:
-    return build_world([GroupSpec("test", Shape(grid), (200, 60, 60), agents)])
+def world_of(shape: np.ndarray | Shape, agents: int | None = None) -> World:
+    shape = shape if isinstance(shape, Shape) else Shape(shape)
+    return build_world([GroupSpec("test", shape, (200, 60, 60), agents)])
 
 
 def make_swarm(
-    grid: np.ndarray,
+    shape: np.ndarray | Shape,
     *,
     agents: int | None = None,
     seed: int = 0,
     order: str = "outward",
     strategy: str = "paper",
 ) -> Swarm:
-    return Swarm(world_of(grid, agents), create(strategy, order=order), seed)
+    """A swarm forming `shape` (moved beside its seeds for a program that grows from them,
+    as `runs.load_world` does)."""
+    program = create(strategy, order=order)
+    shape = shape if isinstance(shape, Shape) else Shape(shape)
+    if getattr(program, "grows_from_seeds", False):
+        shape = shape.seeded()
+    return Swarm(world_of(shape, agents), program, seed)

@@ -213,6 +213,11 @@ def load_world(config: RunConfig) -> World:
         if len(specs) > 1:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
         specs[0] = dataclasses.replace(specs[0], agents=config.agents)
+    grows = not strategies.is_code(config.strategy) and getattr(
+        strategies.get(config.strategy), "grows_from_seeds", False
+    )  # user code is loaded once, when the run starts
+    if grows:
+        specs = [dataclasses.replace(spec, shape=spec.shape.seeded()) for spec in specs]
     packed = config.start == "packed"
     world = build_world(specs, config.arena or scenario.arena, scenario.name, packed)
     cells = len(world.targets)
@@ -223,9 +228,7 @@ def load_world(config: RunConfig) -> World:
             ShapeWarning,
             stacklevel=2,
         )
-    if strategies.is_code(config.strategy):  # user code is loaded once, when the run starts
-        return world
-    if not getattr(strategies.get(config.strategy), "grows_from_seeds", False):
+    if not grows:
         return world
     if config.faults or config.failure_rate:
         warnings.warn(

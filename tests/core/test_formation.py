@@ -46,7 +46,7 @@ def shipped_with(strategies: list[str]) -> list[tuple[str, str]]:
         (name, strategy)
         for name in PAPER_SHAPES + DRAWN_SHAPES
         for strategy in strategies
-        if not grows_from_seeds(strategy) or Shape(shipped(name)).is_solid
+        if not grows_from_seeds(strategy) or Shape(shipped(name)).seeded().is_solid
     ]
 
 
@@ -169,9 +169,8 @@ def test_random_bitmaps_form_deterministically_under_every_strategy(bits, strate
     grid = np.array(bits).reshape(5, 6)
     if not grid.any():
         grid[2, 3] = True
-    if grows_from_seeds(strategy):
-        grid = Shape(grid).solid().grid
-    agents = max(1, int(grid.sum()) + spare)
-    runs = [formed(make_swarm(grid, agents=agents, seed=seed, strategy=strategy)) for _ in "ab"]
+    shape = Shape(grid).solid() if grows_from_seeds(strategy) else Shape(grid)
+    agents = max(1, shape.count + spare)
+    runs = [formed(make_swarm(shape, agents=agents, seed=seed, strategy=strategy)) for _ in "ab"]
     assert runs[0].step_count == runs[1].step_count
     assert np.array_equal(runs[0].cell, runs[1].cell)

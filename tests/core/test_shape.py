@@ -83,11 +83,15 @@ def test_a_shape_from_cells_keeps_where_they_are():
     assert sorted(shape.cells.tolist()) == sorted(cells.tolist())
 
 
-def test_the_seeds_sit_beside_the_first_cell_of_the_top_row():
+def test_a_seeded_shape_touches_its_seeds_and_one_that_already_did_stays_put():
     star_tip = Shape(grid_from("..#.. .###. #####"))
-    assert star_tip.origin == (-2, 0)
-    assert [0, 0] in star_tip.cells.tolist()
-    assert Shape(grid_from("##. .##")).origin == (0, 0)
+    assert star_tip.origin == (0, 0)  # central strategies keep the corner placement
+    assert star_tip.seeded().origin == (-2, 0)
+    assert [0, 0] in star_tip.seeded().cells.tolist()
+    under_the_arm = Shape(grid_from(".## ###"))
+    assert under_the_arm.seeded() is under_the_arm
+    painted = Shape(grid_from("#"), origin=(5, 5))
+    assert painted.seeded().cells.tolist() == [[0, 0]]
 
 
 def test_the_solid_part_fills_what_the_seeds_enclose_and_drops_what_they_cannot_reach():
@@ -102,10 +106,13 @@ def test_the_solid_part_fills_what_the_seeds_enclose_and_drops_what_they_cannot_
     ring = Shape(grid_from("### #.# ###"))
     assert ring.solid().count == 9
     assert Shape(grid_from("### #.. ###")).is_solid
+    assert not Shape(grid_from(".#. ###")).is_solid  # the seed L's corner becomes a hole
+    assert not Shape(grid_from("..# ###")).is_solid  # apart from the seeds until seeded
+    assert Shape(grid_from("..# ###")).seeded().is_solid
 
 
 def test_a_solid_shape_stays_solid_when_fitted_to_fewer_robots():
-    shape = Shape(grid_from("..#... .#..#. .#..#. ###### ###..."))
+    shape = Shape(grid_from("..#... .#..#. .#..#. ###### ###...")).seeded()
     assert shape.is_solid  # its two tips touch the seeds
     for agents in range(1, shape.count):  # shrunk to 5 cells across, a plain resample is not
         fitted = shape.fitted(agents)

@@ -17,6 +17,11 @@ from swarmshape.errors import InputError
 SEED_CELLS = np.array([[-1, -1], [0, -1], [1, -1], [-1, 0]])
 """Four seeds in an L: the long arm marks the frame's x axis, the short one its y axis."""
 
+SEED_SIDES = np.array(
+    [[0, 0], [1, 0], [2, -1], [-2, -1], [-1, -2], [0, -2], [1, -2], [-2, 0], [-1, 1]]
+)
+"""The frame cells that share a side with a seed (and are not one)."""
+
 
 class ShapeError(InputError):
     """A shape or pose that cannot be used; the message says why."""
@@ -54,17 +59,11 @@ def _turn(cells: np.ndarray, quarter_turns: int) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class Shape:
     """A boolean grid, the scale it was shrunk to (1.0 as drawn), and where its top-left cell
-    sits in the seed frame (a painted shape may start anywhere around the seeds). Unless told,
-    the seeds sit beside the first cell of the top row, so the shape touches them even when its
-    top-left corner is empty (a star's): a swarm that grows from its seeds can then reach it."""
+    sits in the seed frame (a painted shape may start anywhere around the seeds)."""
 
     grid: np.ndarray
     scale: float = 1.0
-    origin: tuple[int, int] = None  # type: ignore[assignment]  # None: beside the seeds
-
-    def __post_init__(self) -> None:
-        if self.origin is None:
-            object.__setattr__(self, "origin", _beside_seeds(self.grid))
+    origin: tuple[int, int] = (0, 0)
 
     @classmethod
     def from_cells(cls, cells: np.ndarray) -> Shape:
@@ -81,14 +80,24 @@ class Shape:
         rows, cols = np.nonzero(self.grid)
         return np.column_stack([cols, rows]).astype(np.int64) + np.array(self.origin)
 
+    def seeded(self) -> Shape:
+        """This shape if it touches its seeds, else moved so that the first cell of its top row
+        sits in the seed L's corner: a swarm that grows from its seeds can reach only a shape
+        that touches them (a star's or a disc's top-left corner is empty). Central strategies
+        keep the corner placement: there the seed L stays clear of the robots coming in."""
+        rows, cols = np.nonzero(self.grid)
+        if not len(rows) or self._touches_seeds():
+            return self
+        return Shape(self.grid, self.scale, (-int(cols[0]), -int(rows[0])))
+
     def solid(self) -> Shape:
-        """The part of this shape a swarm that grows outward from its seeds can form: the cells
-        joined to the seeds by cell sides, with every hole that they and the seeds enclose
-        filled (Rubenstein et al.'s robots join only the edge of what is built). The shape
-        itself if it touches no seed."""
+        """The part of this shape a swarm that grows outward from its seeds can form: the
+        `seeded` shape's cells joined to the seeds by cell sides, with every hole that they and
+        the seeds enclose filled (Rubenstein et al.'s robots join only the edge of what is
+        built)."""
         from scipy import ndimage
 
-        cells = np.concatenate([SEED_CELLS, self.cells])
+        cells = np.concatenate([SEED_CELLS, self.seeded().cells])
         low = cells.min(axis=0) - 1
         size = cells.max(axis=0) - low + 2
         grid = np.zeros((size[1], size[0]), dtype=bool)
@@ -102,6 +111,12 @@ class Shape:
             return self
         solid = Shape.from_cells(np.column_stack([cols, rows]) + low)
         return Shape(solid.grid, self.scale, solid.origin)
+
+    def _touches_seeds(self) -> bool:
+        beside = SEED_SIDES - np.array(self.origin)
+        height, width = self.grid.shape
+        inside = (beside >= 0).all(axis=1) & (beside[:, 0] < width) & (beside[:, 1] < height)
+        return bool(self.grid[beside[inside, 1], beside[inside, 0]].any())
 
     @property
     def is_solid(self) -> bool:
@@ -123,20 +138,15 @@ class Shape:
             raise ShapeError("at least one agent is needed to form a shape")
         if self.count <= agents:
             return self
-        origin = None if self.origin == _beside_seeds(self.grid) else self.origin
         solid = self.is_solid
         long_side = max(self.grid.shape)
         fraction = self.grid.astype(np.float64)
         for side in range(long_side - 1, 0, -1):
-            smaller = Shape(crop(resample(fraction, side)), self.scale * side / long_side, origin)
+            smaller = Shape(
+                crop(resample(fraction, side)), self.scale * side / long_side, self.origin
+            )
             if solid:
                 smaller = smaller.solid()
             if 0 < smaller.count <= agents:
                 return smaller
-        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, origin)
-
-
-def _beside_seeds(grid: np.ndarray) -> tuple[int, int]:
-    """The origin that puts the first cell of the grid's top filled row at frame cell (0, 0)."""
-    rows, cols = np.nonzero(grid)
-    return (-int(cols[0]), -int(rows[0])) if len(rows) else (0, 0)
+        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)
