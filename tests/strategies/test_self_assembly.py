@@ -13,7 +13,7 @@ from swarmshape.core.metrics import run_metrics
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import Runner, build, configure, run
-from swarmshape.strategies.self_assembly import JOINED
+from swarmshape.strategies.self_assembly import JOINED, WAIT, SelfAssembly
 from tests.conftest import SHAPES
 
 
@@ -43,6 +43,20 @@ def test_with_lost_messages_and_noisy_distances_the_shape_still_forms():
     swarm = formed("small-square.png", start="packed", seed=3, msg_loss=0.1, distance_noise=0.1)
     assert run_metrics(swarm)["iou"] >= 0.9
     assert swarm.overlap_total == 0
+
+
+def test_the_packed_block_counts_its_hops_from_the_seeds_in_the_shown_gradient():
+    """Rubenstein's gradient through touching (8-neighbour) robots: in the block packed against
+    the seed L it is each waiting robot's chessboard distance to the nearest seed."""
+    swarm = build(configure(SHAPES / "letter-k.png", strategy="self-assembly", start="packed",
+                            cells=12, seed=1))  # fmt: skip
+    for _ in range(200):
+        swarm.step()
+    memory = swarm.driver.memory
+    waiting = memory.state == WAIT
+    apart = np.abs(swarm.cell[waiting][:, None, :] - swarm.world.seeds[None]).max(axis=2)
+    assert waiting.sum() > 20
+    assert np.array_equal(getattr(memory, SelfAssembly.shown)[waiting], apart.min(axis=1))
 
 
 def test_joined_robots_never_move_again():

@@ -100,6 +100,7 @@ class SelfAssembly(Program):
     message_size = 7
     states = STATES
     grows_from_seeds = True
+    shown = "gradient"
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
         "gradient": Slot(np.int64, INFINITE),
