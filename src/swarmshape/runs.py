@@ -180,6 +180,10 @@ def configure(shape: str | Path | None = None, **given: Any) -> RunConfig:
     file, overridden by `given` (options left at None count as not given), with a seed."""
     path = None if shape is None else Path(shape)
     from_file = {} if path is None else scenario_settings(path)
+    try:
+        RunConfig(shape=path, **from_file)
+    except InputError as error:  # say which file holds the value
+        raise InputError(f"{path}: {error}") from None
     chosen = {key: value for key, value in given.items() if value is not None}
     unknown = sorted(set(chosen) - {f.name for f in dataclasses.fields(RunConfig)})
     if unknown:

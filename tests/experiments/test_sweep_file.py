@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from swarmshape.errors import InputError
-from swarmshape.experiments.sweep import read_sweep, sweep
+from swarmshape.experiments.sweep import read_sweep, run_one, sweep
 from tests.conftest import SHAPES
 
 LINE = f"shapes = ['{SHAPES / 'line.png'}']\nstrategies = ['optimal']\n"
@@ -67,6 +67,11 @@ def test_a_sweep_over_the_cap_is_refused_saying_how_many_runs_it_asks_for(tmp_pa
         ("max_speed = 3", "max speed must be in [0.001, 1] cells per step, got 3"),
         ("max_speed = 0.25\nmax_accel = 0.5", "max acceleration must be in [0.001, max speed]"),
         ("cells = 0", "cells must be a whole number of at least 1"),
+        ("msg_loss = [0, 1]", "msg_loss must be a number that --msg-loss takes, or a list of "
+         "them; got 1"),
+        ("distance_noise = 'some'", "distance_noise must be a number that --distance-noise"),
+        ("sense_radius = 0.5", "sense_radius must be a number that --sense-radius takes"),
+        ("speed_variation = true", "speed_variation must be a number"),
         ("curve_every = -2", "curve_every must be a whole number of at least 1, or a list of "
          "them; got -2"),
         ("curve_every = 0", "curve_every must be a whole number of at least 1"),
@@ -140,6 +145,14 @@ def test_good_values_make_every_combination_once_per_seed(tmp_path):
         (0, 1, 7),
         (0, 1, 3),
     ]
+
+
+def test_noise_keys_reach_each_run(tmp_path):
+    text = LINE.replace("optimal", "local-swap") + "msg_loss = [0, 0.5]\nmax_steps = 30\n"
+    path = sweep_file(tmp_path, text)
+    rows = [run_one(run, path.parent) for run in read_sweep(path)]
+    assert [row["config.msg_loss"] for row in rows] == [0, 0.5]
+    assert rows[0]["messages_lost"] == 0 < rows[1]["messages_lost"]
 
 
 def test_a_pipe_or_a_device_is_refused_not_read(tmp_path):

@@ -5,6 +5,7 @@ import pytest
 from swarmshape.core.shape import Pose
 from swarmshape.errors import InputError
 from swarmshape.io.scenario import load_scenario, scenario_settings
+from swarmshape.runs import configure
 from tests.conftest import SHAPES
 
 
@@ -42,6 +43,7 @@ def write(tmp_path, text):
         ("[[groups]]\nshape = 'line.png'\npose = {x = 1, z = 2}\n", "unknown key 'z'"),
         ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "two integers"),
         ("max_speed = 'fast'\n[[groups]]\nshape = 'line.png'\n", "max_speed must be"),
+        ("msg_loss = 'often'\n[[groups]]\nshape = 'line.png'\n", "msg_loss must be"),
         ("[[groups]]\nshape = 'missing.png'\n", "no such file"),
     ],
 )
@@ -49,6 +51,15 @@ def test_bad_scenarios_name_the_file_and_the_key(tmp_path, text, message):
     path = write(tmp_path, text)
     with pytest.raises(InputError, match=message):
         load_scenario(path)
+
+
+def test_noise_settings_reach_the_run_and_a_bad_one_names_the_file(tmp_path):
+    path = write(tmp_path, "msg_loss = 0.3\ndistance_noise = 0\n[[groups]]\nshape = 'line.png'\n")
+    config = configure(path, seed=1)
+    assert (config.msg_loss, config.distance_noise) == (0.3, 0.0)
+    path = write(tmp_path, "sense_radius = 40\n[[groups]]\nshape = 'line.png'\n")
+    with pytest.raises(InputError, match=f"^{path}: --sense-radius must be from 1 to 16"):
+        configure(path)
 
 
 def test_a_scenario_nested_deeper_than_python_recurses_is_one_clear_error(tmp_path):

@@ -5,6 +5,7 @@
     agents = [50, 90, 150]                        # 0 means one per cell
     seeds = 3                                     # a count (0, 1, 2) or a list
     cells = 32                                    # any further run option, one value or a list
+    msg_loss = [0, 0.1, 0.3]                      # noise: msg_loss, distance_noise, ...
     max_steps = 200000
 
 Every key but `seeds` may hold one value or a list; each combination runs once per seed.
@@ -39,6 +40,7 @@ from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
 from swarmshape.io.files import readable_file
+from swarmshape.io.scenario import NOISE_KEYS
 from swarmshape.runs import (
     Observer,
     RunConfig,
@@ -48,6 +50,11 @@ from swarmshape.runs import (
     registered_strategy,
     run,
 )
+
+
+def _accepted_by(name: str) -> Callable[[Any], bool]:
+    return lambda value: _accepted(name, value)
+
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
 KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
@@ -65,6 +72,10 @@ KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "stall": ("AMOUNT@STEP text such as '0.1@300' (robots stalled)", lambda v: _fault(v)),
     "fail_region": ("X,Y,W,H@STEP text such as '4,4,6,6@300'", lambda v: _region(v)),
     "failure_rate": ("a number from 0 up to (not including) 1", lambda v: _rate(v)),
+    **{
+        name: (f"a number that --{name.replace('_', '-')} takes", _accepted_by(name))
+        for name in NOISE_KEYS
+    },
 }
 FAULT_KEYS = ("fail", "stall", "fail_region")
 """Sweep keys that each make one fault event of a run (a list of them: one run per value)."""
@@ -211,6 +222,14 @@ def _fault(value: Any) -> bool:
 def _region(value: Any) -> bool:
     try:
         return isinstance(value, str) and bool(parse_region(value))
+    except InputError:
+        return False
+
+
+def _accepted(name: str, value: Any) -> bool:
+    """Whether `value` is a number the run option `name` accepts (its own check decides)."""
+    try:
+        return _number(value) and bool(RunConfig(**{name: float(value)}))
     except InputError:
         return False
 

@@ -38,8 +38,10 @@ from swarmshape.io.files import readable_file
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
 
+NOISE_KEYS = ("sense_radius", "distance_noise", "msg_loss", "speed_variation")
+"""How well robots sense, talk and move (numbers; the run checks their ranges)."""
 TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel",
-            "start", "faults", "failure_rate"}  # fmt: skip
+            "start", "faults", "failure_rate", *NOISE_KEYS}  # fmt: skip
 GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
 POSE_KEYS = {"x", "y", "rotation"}
 
@@ -129,7 +131,7 @@ def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
             f"{where.path}: strategy = {settings['strategy']!r} points at code, and a scenario is "
             "data: name a registered or installed strategy, or give --strategy on the command line"
         )
-    for key in ("max_speed", "max_accel"):
+    for key in ("max_speed", "max_accel", *NOISE_KEYS):
         if key in settings:
             settings[key] = float(where.typed(settings[key], (int, float), key))
     if "start" in settings and settings["start"] not in START_LAYOUTS:
