@@ -113,6 +113,19 @@ def test_too_few_survivors_re_form_the_shape_smaller_and_say_so():
     assert metrics["targets"] <= world.agents - metrics["robots_lost"]
 
 
+def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
+    """Hypothesis found this run: after the third fault the survivors were re-formed as a 2x2
+    copy whose cells stalled robots held or (one coasting into place) walled off beside the
+    seeds, so the shape could never be formed; the copy chosen must hold a cell they reach."""
+    grid = grid_from("#..## ##.#. .##.. ##.##")
+    events = ((0, "remove", 0.081), (125, "stall", 0.341), (78, "stall", 0.471, (6, 3, 4)))
+    faults = Faults(tuple(FaultEvent(*event) for event in events))
+    swarm = Swarm(world_of(grid, int(grid.sum()) - 1), create("paper"), 6034845, faults=faults)
+    Runner(swarm, max_steps=2500).finish()
+    assert (swarm.state == STALLED).sum() == 5 and swarm.faults.log[-1]["scale"] < 0.8
+    assert swarm.complete and swarm.filled.any()
+
+
 def test_a_removed_robot_leaves_the_lattice_and_its_follower_takes_its_cell():
     world = world_of(BLOCK, BLOCK.sum() + 4)
     swarm = Swarm(world, create("optimal"), 1)

@@ -7,6 +7,7 @@ frame with a `Pose` moves and rotates the shape and its seeds together.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -131,13 +132,17 @@ class Shape:
         """The largest rescaled copy whose cell count does not exceed `agents`.
 
         The paper's answer to too few robots: form the same shape, smaller. The scale is the
-        ratio of long sides, so a user can read how much was lost. A solid shape stays solid
-        (shrinking may close a notch into a hole or cut off a thin tip).
+        ratio of long sides, so a user can read how much was lost.
         """
         if agents < 1:
             raise ShapeError("at least one agent is needed to form a shape")
         if self.count <= agents:
             return self
+        return next(smaller for smaller in self.shrunk() if smaller.count <= agents)
+
+    def shrunk(self) -> Iterator[Shape]:
+        """Ever smaller rescaled copies, largest first, down to a single cell. A solid shape's
+        copies stay solid (shrinking may close a notch into a hole or cut off a thin tip)."""
         solid = self.is_solid
         long_side = max(self.grid.shape)
         fraction = self.grid.astype(np.float64)
@@ -147,6 +152,6 @@ class Shape:
             )
             if solid:
                 smaller = smaller.solid()
-            if 0 < smaller.count <= agents:
-                return smaller
-        return Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)
+            if smaller.count:
+                yield smaller
+        yield Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)

@@ -334,6 +334,8 @@ class Swarm:
         self.step_count += 1
         if self.dead.any() and (self.ahead[self.state == STALLED] > 0).any():
             self.dead = self._find_dead()  # a stalled robot coasted into its last cell
+            for group in range(len(self.world.groups)):
+                self._rescale_if_short(group)
         self._audit()
         self._note_completion()
         self.faults.note(self.step_count, self.complete)
@@ -539,14 +541,22 @@ class Swarm:
         self.speed[robots] = 0.0
 
     def _rescale_if_short(self, group: int) -> None:
-        """Too few robots left to fill the group's reachable cells: form the same shape at the
-        largest scale the survivors can fill (the paper's answer to too few robots, live)."""
-        mine = self.group == group
-        mobile = int((mine & (self.state != LOST) & (self.state != STALLED)).sum())
-        fillable = int((~self.dead & (self.world.target_group == group)).sum())
-        if mobile >= fillable or mobile < 1:
+        """Too few robots left to fill the group's reachable cells, or none of them left to
+        fill: form the same shape at the largest scale the survivors can fill and reach (the
+        paper's answer to too few robots, live; stalled robots may wall off a small copy)."""
+        mobile = int((self._mobile() & (self.group == group)).sum())
+        shape, pose = self.world.groups[group].shape, self.world.groups[group].pose
+        reachable = self._reachable(group)
+
+        def fillable(candidate: Shape) -> int:
+            cells = pose.to_world(candidate.cells)
+            return int(reachable[cells[:, 0], cells[:, 1]].sum())
+
+        if mobile < 1 or 1 <= fillable(shape) <= mobile:
             return
-        self.reshape(group, self.world.groups[group].shape.fitted(mobile))
+        smaller = next((s for s in shape.shrunk() if 1 <= fillable(s) <= mobile), None)
+        if smaller is not None:
+            self.reshape(group, smaller)
 
     def _whole(self, group: int) -> bool:
         """Every target of `group` is filled or lost to stalled robots (see `dead`), and not
@@ -558,26 +568,37 @@ class Swarm:
     def _find_dead(self) -> np.ndarray:
         """Targets held by a stalled robot, or cut off by stalled robots (with the seeds and the
         other groups' shapes) from every robot of their group that can still move."""
-        world, state = self.world, self.state
+        world = self.world
         dead = np.zeros(len(world.targets), dtype=bool)
-        if not (state == STALLED).any():
+        if not (self.state == STALLED).any():
             return dead
-        grid = self.lattice.grid
-        robot = np.maximum(grid, 0)
-        stalled = (grid >= 0) & (state[robot] == STALLED)
-        width, height = world.size
-        owner = self.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
         x, y = world.targets[:, 0], world.targets[:, 1]
-        dead |= stalled[x, y]
         for g in range(len(world.groups)):
-            mobile = (self.group == g) & (state != LOST) & (state != STALLED)
-            passable = ~stalled & (grid != SEED) & ((owner < 0) | (owner == g))
-            labels, _ = ndimage.label(passable)
-            cells = self.cell[mobile]
-            reached = np.unique(labels[cells[:, 0], cells[:, 1]])
             mine = world.target_group == g
-            dead[mine] |= ~np.isin(labels[x[mine], y[mine]], reached[reached > 0])
+            dead[mine] = ~self._reachable(g)[x[mine], y[mine]]
         return dead
+
+    def _reachable(self, group: int) -> np.ndarray:
+        """Per arena cell, whether a robot of `group` that can still move may get there: not
+        held by a stalled robot, and not walled off by stalled robots, seeds and the other
+        groups' shapes. Every cell but the seeds' while nothing has stalled."""
+        grid = self.lattice.grid
+        if not (self.state == STALLED).any():
+            return grid != SEED
+        stalled = (grid >= 0) & (self.state[np.maximum(grid, 0)] == STALLED)
+        width, height = self.world.size
+        owner = self.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
+        passable = ~stalled & (grid != SEED) & ((owner < 0) | (owner == group))
+        labels, count = ndimage.label(passable)
+        cells = self.cell[self._mobile() & (self.group == group)]
+        reached = np.zeros(count + 1, dtype=bool)
+        reached[labels[cells[:, 0], cells[:, 1]]] = True
+        reached[0] = False  # the walls
+        return reached[labels]
+
+    def _mobile(self) -> np.ndarray:
+        """Per robot, whether it can still move (neither lost nor stalled)."""
+        return (self.state != LOST) & (self.state != STALLED)
 
 
 def _renumbering(old: np.ndarray, new: np.ndarray, size: tuple[int, int]) -> np.ndarray:
