@@ -51,11 +51,6 @@ from swarmshape.runs import (
     run,
 )
 
-
-def _accepted_by(name: str) -> Callable[[Any], bool]:
-    return lambda value: _accepted(name, value)
-
-
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
 KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "shapes": ("a file name", lambda v: isinstance(v, str) and v != ""),
@@ -73,7 +68,10 @@ KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
     "fail_region": ("X,Y,W,H@STEP text such as '4,4,6,6@300'", lambda v: _region(v)),
     "failure_rate": ("a number from 0 up to (not including) 1", lambda v: _rate(v)),
     **{
-        name: (f"a number that --{name.replace('_', '-')} takes", _accepted_by(name))
+        name: (
+            f"a number that --{name.replace('_', '-')} takes",
+            lambda v, name=name: _accepted(name, v),
+        )
         for name in NOISE_KEYS
     },
 }
