@@ -450,12 +450,15 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     next_cell = cell + DIRECTION[choice]
     leaves = ~sense.blueprint.contains(sense.group, next_cell) | (choice == 0)
     # never seal a pocket of the shape: step into it instead (see `_pocket`)
+    stopping = np.flatnonzero(inside & (layer_end | leaves))
     sealed = np.zeros(len(choice), dtype=np.int64)
     for d in range(1, 5):
-        pocket = _pocket(view, d) & sense.blueprint.contains(sense.group, cell + DIRECTION[d])
-        sealed[(sealed == 0) & pocket] = d
+        beside = cell[stopping] + DIRECTION[d]
+        pocket = _pocket(view.stationary[stopping], d)
+        pocket &= sense.blueprint.contains(sense.group[stopping], beside)
+        sealed[stopping[(sealed[stopping] == 0) & pocket]] = d
     join = inside & (layer_end | leaves) & (sealed == 0)
-    way = np.where(inside & (layer_end | leaves) & (sealed > 0), sealed, way)
+    way = np.where(sealed > 0, sealed, way)
     state[join] = JOINED
     memory.gradient[join] = mine[join]
     blocked = view.taken[rows, _slot(DIRECTION[way])]
@@ -477,13 +480,13 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     moves[found] = heading[found]
 
 
-def _pocket(view: _View, d: int) -> np.ndarray:
+def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     """Whether the free cells one step in direction `d` form a pocket that the built
-    structure and the robot itself wall in, within its 5x5 window: if the robot stopped here,
-    no robot could ever reach them (a lattice's dead ends, which the paper's round robots on
-    a continuous floor do not meet)."""
-    a = len(view.ready)
-    free = ~view.stationary.reshape(a, 5, 5)
+    structure and the robot itself wall in, within its 5x5 window (`stationary`, ``(a, 25)``):
+    if the robot stopped here, no robot could ever reach them (a lattice's dead ends, which
+    the paper's round robots on a continuous floor do not meet)."""
+    a = len(stationary)
+    free = ~stationary.reshape(a, 5, 5)
     free[:, 2, 2] = False
     reach = np.zeros((a, 5, 5), dtype=bool)
     reach[:, 2 + DIRECTION[d, 1], 2 + DIRECTION[d, 0]] = True
