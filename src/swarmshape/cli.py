@@ -8,6 +8,8 @@ pointing to a log, exit code 1. The window (and pygame) is only loaded when one 
 from __future__ import annotations
 
 import argparse
+import ctypes
+import ctypes.util
 import os
 import sys
 import tempfile
@@ -286,12 +288,30 @@ def _version() -> str:
         return "unknown"
 
 
+MMAP_THRESHOLD = 32 << 20
+TRIM_THRESHOLD = 64 << 20
+"""glibc's ``mallopt`` settings for a run (see `_reuse_freed_memory`)."""
+
+
+def _reuse_freed_memory() -> None:
+    """Let glibc keep freed arrays for reuse. By default every array over 128 KiB is a fresh
+    ``mmap`` whose pages fault in again, and a step allocates dozens of them: 1,500 steps of
+    the 1,024-robot self-assembly K took 26.8 s (2.2 s of it in the kernel), 17.8 s with
+    these settings. Elsewhere (no glibc) nothing changes."""
+    library = ctypes.util.find_library("c")
+    mallopt = getattr(ctypes.CDLL(library), "mallopt", None) if library else None
+    if mallopt is not None:
+        mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
+        mallopt(-1, TRIM_THRESHOLD)  # M_TRIM_THRESHOLD
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
         argv.insert(0, "run")
     args = build_parser().parse_args(argv)
     warnings.showwarning = _first_warning()
+    _reuse_freed_memory()
     try:
         return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
