@@ -28,6 +28,9 @@ def main() -> int:
     except InputError as error:
         print(f"success.py: error: {error}", file=sys.stderr)
         return 2
+    if not rows:
+        print(f"success.py: error: {args.results}: no runs in it yet", file=sys.stderr)
+        return 2
     varied = [
         name
         for name in rows[0]
