@@ -237,12 +237,14 @@ class LocalControl:
         silent = np.concatenate([swarm.state == STALLED, np.zeros(len(seeds), dtype=bool)])
         heard &= ~silent[other]
         self.links = (owner[heard], other[heard])
-        robot = heard & ~seed
-        message = np.zeros((len(owner), self.program.message_size), dtype=np.int64)
-        message[robot] = np.take(self.broadcast, other[robot], axis=0)
-        seed_frame = np.zeros((len(owner), 2), dtype=np.int64)
-        heard_seed = heard & seed
-        seed_frame[heard_seed] = np.take(self.seed_frame, other[heard_seed] - n, axis=0)
+        # gather every entry's row, seeds' and robots' alike, then blank the few unheard (1)
+        unheard = np.flatnonzero(~heard)
+        said = np.zeros((len(seeds), self.program.message_size), dtype=np.int64)
+        message = np.take(np.concatenate([self.broadcast, said]), other, axis=0)
+        message[unheard] = 0
+        frames = np.concatenate([np.zeros((n, 2), dtype=np.int64), self.seed_frame])
+        seed_frame = np.take(frames, other, axis=0)
+        seed_frame[unheard] = 0
         moved = turn(swarm.cell - self.last_cell, (-self.turns[swarm.group]) % 4)
         self.last_cell = swarm.cell.copy()
         return Perception(

@@ -175,18 +175,21 @@ class _Near:
         self.slot = (self.cy + 2) * 5 + (self.cx + 2)
         self.kin = sense.kin[e]
         self.seed = sense.seed[e] & self.kin  # another group's seeds are only obstacles
-        state = sense.message[e, STATE] - 1
-        self.spoke = sense.heard[e] & sense.kin[e] & ~self.seed & (state >= 0)
+        said = np.take(sense.message, e, axis=0)  # see `LocalControl.perceive` (1)
+        state = said[:, STATE] - 1
+        self.spoke = sense.heard[e] & self.kin & ~self.seed & (state >= 0)
         self.state = state
         self.stays = (state <= WAIT) | (state >= JOINED)
-        self.gradient = np.minimum(sense.message[e, GRADIENT], INFINITE)
+        self.gradient = np.minimum(said[:, GRADIENT], INFINITE)
         n = len(sense)
         touching = TOUCHING[self.slot]
         self.crowded = np.bincount(self.me[touching], minlength=n) >= 8
-        want = sense.message[e, WANT] * (sense.message[e, WANT] < len(DIRECTION))
-        aim = np.column_stack([self.cx, self.cy]) + DIRECTION[np.maximum(want, 0)]
+        want = said[:, WANT]
         # a moving neighbour that waits to step into the robot's own cell
-        self.facing = self.spoke & ~self.stays & (want > 0) & ~aim.any(axis=1)
+        asking = np.flatnonzero(self.spoke & ~self.stays & (want > 0) & (want < len(DIRECTION)))
+        aim = DIRECTION[want[asking]]
+        self.facing = np.zeros(len(e), dtype=bool)
+        self.facing[asking] = (self.cx[asking] == -aim[:, 0]) & (self.cy[asking] == -aim[:, 1])
         unheard = ~sense.heard & sense.kin & ~sense.seed
         self.missed = np.bincount(sense.owner[unheard], minlength=n) > 0
 
