@@ -23,7 +23,7 @@ from typing import NoReturn
 from swarmshape.core.faults import FaultEvent, parse_event, parse_region
 from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError
-from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume
+from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume, start_of
 from swarmshape.session import Outputs, Session, preview_text
 from swarmshape.strategies.fill_order import ORDERS
 
@@ -271,14 +271,13 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def _start(text: str) -> str | Path:
-    """A start layout by name, or a CSV of start cells."""
-    if text in START_LAYOUTS:
-        return text
-    if Path(text).suffix.lower() == ".csv" or Path(text).exists():
-        return Path(text)
-    raise argparse.ArgumentTypeError(
-        f"expected {', '.join(START_LAYOUTS)} or a CSV file of start cells, got {text!r}"
-    )
+    """A start layout by name, or a CSV of start cells (see `runs.start_of`)."""
+    try:
+        return start_of(text)
+    except InputError:
+        raise argparse.ArgumentTypeError(
+            f"expected {', '.join(START_LAYOUTS)} or a CSV file of start cells, got {text!r}"
+        ) from None
 
 
 def _version() -> str:

@@ -91,10 +91,7 @@ class RunConfig:
             raise InputError(f"unknown --fit {self.fit!r}; choose {', '.join(map(str, FITS[1:]))}")
         if self.fit == "agents" and self.agents is None:
             raise InputError("--fit agents sizes the shape to --agents N; give that number")
-        if isinstance(self.start, str) and self.start not in START_LAYOUTS:
-            raise InputError(
-                f"unknown --start {self.start!r}; choose {', '.join(START_LAYOUTS)} or a CSV file"
-            )
+        object.__setattr__(self, "start", start_of(self.start))
         Limits(self.max_speed, self.max_accel)  # checks them
         Params(speed_variation=self.speed_variation)
         self.senses()
@@ -173,6 +170,16 @@ def _typed(value: Any, kind: type, where: str) -> Any:
     if isinstance(value, kind) and (kind is bool or not isinstance(value, bool)):
         return value
     raise InputError(f"{where} must be {kind.__name__}, got {value!r}")
+
+
+def start_of(value: str | Path | None) -> str | Path | None:
+    """A start layout by name, or the path of a CSV of start cells (text naming a ``.csv``
+    or an existing file is one); a misspelt name is one clear error."""
+    if value is None or isinstance(value, Path) or value in START_LAYOUTS:
+        return value
+    if Path(value).suffix.lower() == ".csv" or Path(value).exists():
+        return Path(value)
+    raise InputError(f"unknown --start {value!r}; choose {', '.join(START_LAYOUTS)} or a CSV file")
 
 
 def configure(shape: str | Path | None = None, **given: Any) -> RunConfig:

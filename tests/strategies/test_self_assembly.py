@@ -92,6 +92,8 @@ def test_the_packed_start_is_a_block_against_the_seeds():
     assert (high - low + 1).prod() == len(swarm.cell)  # 64 robots: an 8x8 block
 
 
-def test_an_unknown_start_word_is_refused():
+def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_path):
     with pytest.raises(InputError, match="unknown --start 'pakced'"):
         configure(SHAPES / "square.png", start="pakced")
+    cells = tmp_path / "start.csv"  # as the environment and scripts pass it
+    assert configure(SHAPES / "square.png", start=str(cells)).start == cells
