@@ -32,6 +32,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
+from scipy import ndimage
 
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.perception import Perception
@@ -91,6 +92,9 @@ NEAR8 = np.array([6, 7, 8, 11, 13, 16, 17, 18])
 """The window slots of the 8 cells around the robot."""
 TOUCHING = np.isin(np.arange(25), NEAR8)
 """Per window slot, whether it is one of `NEAR8`."""
+SIDES_IN_A_WINDOW = np.stack([np.zeros((3, 3), bool), ndimage.generate_binary_structure(2, 1),
+                              np.zeros((3, 3), bool)])  # fmt: skip
+"""Cells that share a side, within one robot's window of a stack of windows."""
 
 
 @register
@@ -491,16 +495,9 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     a = len(stationary)
     free = ~stationary.reshape(a, 5, 5)
     free[:, 2, 2] = False
-    reach = np.zeros((a, 5, 5), dtype=bool)
-    reach[:, 2 + DIRECTION[d, 1], 2 + DIRECTION[d, 0]] = True
-    reach &= free
-    for _ in range(8):  # the 3x3 inside the ring holds at most 8 cells besides the robot's
-        grown = reach.copy()
-        grown[:, 1:, :] |= reach[:, :-1, :]
-        grown[:, :-1, :] |= reach[:, 1:, :]
-        grown[:, :, 1:] |= reach[:, :, :-1]
-        grown[:, :, :-1] |= reach[:, :, 1:]
-        reach = grown & free
+    start = np.zeros((a, 5, 5), dtype=bool)
+    start[:, 2 + DIRECTION[d, 1], 2 + DIRECTION[d, 0]] = True
+    reach = ndimage.binary_propagation(start & free, structure=SIDES_IN_A_WINDOW, mask=free)
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
 
