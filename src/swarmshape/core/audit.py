@@ -37,22 +37,40 @@ def overlaps(
     if not shared.any():
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     i, j = _pairs_in_cells(keys[shared], owners[shared])
-    everything_at = np.concatenate([positions(cell, direction, offset), seeds + 0.5])
-    touching_or_apart = np.abs(everything_at[i] - everything_at[j]).max(axis=1) >= TOUCH
+    at_i, at_j = (_centres(k, cell, direction, offset, seeds) for k in (i, j))
+    touching_or_apart = np.abs(at_i - at_j).max(axis=1) >= TOUCH
     return i[~touching_or_apart], j[~touching_or_apart]
+
+
+def _centres(
+    which: np.ndarray,
+    cell: np.ndarray,
+    direction: np.ndarray,
+    offset: np.ndarray,
+    seeds: np.ndarray,
+) -> np.ndarray:
+    """Square centres of robots and seeds by number (seed ``s`` is ``len(cell) + s``), for
+    the few that share a cell rather than for all."""
+    robot = np.minimum(which, len(cell) - 1)
+    at = positions(cell[robot], direction[robot], offset[robot])
+    is_seed = which >= len(cell)
+    at[is_seed] = seeds[which[is_seed] - len(cell)] + 0.5
+    return at
 
 
 def _pairs_in_cells(keys: np.ndarray, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every pair of distinct owners that share a key (a cell)."""
     order = np.argsort(keys, kind="stable")
     keys, owners = keys[order], owners[order]
-    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
-    sizes = np.diff(np.r_[starts, len(keys)])
     found_i, found_j = [], []
-    for gap in range(1, int(sizes.max())):  # pairs a gap apart within each run
-        first = np.flatnonzero(np.r_[keys[gap:] == keys[:-gap], np.zeros(gap, dtype=bool)])
+    gap = 1
+    while gap < len(keys):  # pairs a gap apart within each run of one key
+        first = np.flatnonzero(keys[gap:] == keys[:-gap])
+        if len(first) == 0:
+            break
         found_i.append(owners[first])
         found_j.append(owners[first + gap])
+        gap += 1
     i, j = np.concatenate(found_i), np.concatenate(found_j)
     distinct = i != j
     return i[distinct], j[distinct]

@@ -283,9 +283,7 @@ class LocalControl:
         settled (a shape change can leave a finished robot off the new shape; it is not settled
         there), those under way are moving; a target is filled while a settled robot is on it."""
         swarm = self.swarm
-        index = np.full(swarm.world.size, -1)
-        index[swarm.world.targets[:, 0], swarm.world.targets[:, 1]] = np.arange(len(swarm.filled))
-        at = index[swarm.cell[:, 0], swarm.cell[:, 1]]
+        at = swarm.target_at[swarm.cell[:, 0], swarm.cell[:, 1]]
         on_target = (at >= 0) & (swarm.world.target_group[np.maximum(at, 0)] == swarm.group)
         working = (swarm.state != LOST) & (swarm.state != STALLED)
         swarm.state[working] = np.where(swarm.ahead[working] > 0, MOVING, WAITING)

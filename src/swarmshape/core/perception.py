@@ -179,5 +179,6 @@ def neighbours(
     hit = np.flatnonzero(found >= 0)  # row-major: by robot, then in reach order
     owner = here[hit // max(1, len(reach))]
     other = found.ravel()[hit]
-    start = np.searchsorted(owner, np.arange(n + 1))
+    start = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(owner, minlength=n), out=start[1:])
     return start, owner, other

@@ -289,8 +289,9 @@ class Swarm:
         self.lattice.mark_targets(world.targets, world.target_group)
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
-        self._target_at = np.full(world.size, -1, dtype=np.int64)
-        self._target_at[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
+        self.target_at = np.full(world.size, -1, dtype=np.int64)
+        self.target_at[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
+        """The index of the target at each cell, -1 where there is none."""
         self.dead = self._find_dead()
         self.driver.index_world()
 
@@ -492,7 +493,7 @@ class Swarm:
         robots = robots[(self.state[robots] != LOST) & ~(stall & (self.state[robots] == STALLED))]
         before = float(self.filled.mean()) if len(self.filled) else 1.0
         settled = robots[self.state[robots] == SETTLED]
-        targets = self._target_at[self.cell[settled, 0], self.cell[settled, 1]]
+        targets = self.target_at[self.cell[settled, 0], self.cell[settled, 1]]
         self.filled[targets[targets >= 0]] = False
         if stall:
             self.state[robots] = STALLED
