@@ -22,7 +22,7 @@ from swarmshape.core.states import LOST, SETTLED, STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import build_world
 from swarmshape.io.scenario import load_scenario
-from swarmshape.runs import Runner, configure, resume, save
+from swarmshape.runs import Runner, configure, load_world, resume, save, start_cells, start_swarm
 from swarmshape.strategies import available, create
 from tests.conftest import SHAPES, grid_from, world_of
 
@@ -124,6 +124,25 @@ def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
     Runner(swarm, max_steps=2500).finish()
     assert (swarm.state == STALLED).sum() == 5 and swarm.faults.log[-1]["scale"] < 0.8
     assert swarm.complete and swarm.filled.any()
+
+
+@pytest.mark.parametrize(("strategy", "seed"), [("greedy", 2), ("greedy", 3), ("optimal", 2)])
+def test_a_settled_robot_pushed_on_by_a_swap_does_not_swap_straight_back(strategy, seed):
+    """Found by running the shipped letter S with a tenth of its robots removed early: the
+    re-formed shape's recruits go round settled robots, and a settled robot swapped out of
+    its cell inherited that, turned back to the mover and swapped its target back, every
+    step for ever (coverage stuck at 96 to 99 %)."""
+    config = configure(
+        SHAPES / "letter-s.png",
+        seed=seed,
+        strategy=strategy,
+        faults=(FaultEvent(20, "remove", 0.1),),
+    )
+    world = load_world(config)
+    swarm = start_swarm(config, world, start_cells(config, world))
+    Runner(swarm, max_steps=1500).finish()
+    assert swarm.faults.log[0]["scale"] < 1, "the survivors formed a smaller copy"
+    assert swarm.complete
 
 
 def test_a_removed_robot_leaves_the_lattice_and_its_follower_takes_its_cell():

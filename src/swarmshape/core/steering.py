@@ -477,6 +477,9 @@ class Steering:
         self.target[movers], self.target[settled] = self.target[settled], self.target[movers].copy()
         both = np.concatenate([movers, settled])
         self.blocked[both] = 0
+        # a swap passes the trip on through settled robots: going round them now would turn
+        # the pushed robot back into the mover, which swaps it back in, for ever
+        self.recruited[both] = False
         self.planner.forget(both)
 
     def _roaming(self) -> np.ndarray:
