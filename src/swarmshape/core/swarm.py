@@ -329,14 +329,13 @@ class Swarm:
     def step(self) -> None:
         if self.faults.scheduled:
             self._strike()
+        coasting = np.flatnonzero((self.state == STALLED) & (self.ahead > 0))
         self.driver.decide()
         self._move()
         self.driver.arrived()
         self.step_count += 1
-        if self.dead.any() and (self.ahead[self.state == STALLED] > 0).any():
-            self.dead = self._find_dead()  # a stalled robot coasted into its last cell
-            for group in range(len(self.world.groups)):
-                self._rescale_if_short(group)
+        if len(coasting):
+            self._walls_moved(coasting)
         self._audit()
         self._note_completion()
         self.faults.note(self.step_count, self.complete)
@@ -540,6 +539,20 @@ class Swarm:
         self.ahead[robots] = 0
         self.offset[robots] = 0.0
         self.speed[robots] = 0.0
+
+    def _walls_moved(self, coasting: np.ndarray) -> None:
+        """Stalled robots coasted on this step, so the targets they cut off may have changed:
+        the driver hears of it as of their fault, and stops robots heading for a target now cut
+        off and hands out one opened again. Without this a target walled off while the fault
+        struck stayed open for good once the wall moved on (a star with 5 % stalled early:
+        coverage 98.7 % after 5,000 steps, 31 robots idle)."""
+        dead = self._find_dead()
+        if np.array_equal(dead, self.dead):
+            return
+        self.dead = dead
+        self.driver.removed(coasting, stalled=True)
+        for group in range(len(self.world.groups)):
+            self._rescale_if_short(group)
 
     def _rescale_if_short(self, group: int) -> None:
         """Too few robots left to fill the group's reachable cells, or none of them left to
