@@ -133,6 +133,7 @@ def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
         ("letter-s", "greedy", 3, FaultEvent(20, "remove", 0.1)),
         ("letter-s", "optimal", 2, FaultEvent(20, "remove", 0.1)),
         ("star", "optimal", 2, FaultEvent(20, "stall", 0.05)),
+        ("square", "random", 2, FaultEvent(20, "remove", 0.1)),
     ],
 )
 def test_an_early_fault_on_a_shipped_shape_heals(shape, strategy, seed, event):
@@ -142,7 +143,9 @@ def test_an_early_fault_on_a_shipped_shape_heals(shape, strategy, seed, event):
       swapped out of its cell inherited that, turned back to the mover and swapped its
       target back, every step for ever;
     - the stall: a target walled off by a stalled robot still coasting was opened when it
-      came to rest, and nobody was sent to it."""
+      came to rest, and nobody was sent to it;
+    - the square: a robot released by the re-forming came to rest on a mover's target, boxed
+      in by settled robots, and neither could ever pass the other."""
     config = configure(SHAPES / f"{shape}.png", seed=seed, strategy=strategy, faults=(event,))
     world = load_world(config)
     swarm = start_swarm(config, world, start_cells(config, world))

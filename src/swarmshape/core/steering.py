@@ -445,6 +445,11 @@ class Steering:
         if self.motion is Motion.ROUTE:
             return blocker[idle]
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
+        wanders = idle & (state == WANDERING)  # a waiting robot may still be sent elsewhere
+        on_it = wanders & same_group & self._on_their_target(robot, blocked)
+        if on_it.any():
+            self._hand_over(blocked[on_it], robot[on_it])
+            return self._make_way(blocked[~on_it], blocker[~on_it])
         settled = is_robot & (state == SETTLED)
         waits_for_mover = same_group & at_rest & (state == MOVING)
         receivers, targets = rotate_rings(
@@ -468,6 +473,20 @@ class Steering:
         fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group) | stalled
         self.routed[blocked[fixed]] = True
         return blocker[idle]
+
+    def _on_their_target(self, robots: np.ndarray, movers: np.ndarray) -> np.ndarray:
+        """Whether each robot rests on the target of the mover it blocks."""
+        goals = self.swarm.world.targets[self.target[movers]]
+        return (self.swarm.cell[robots] == goals).all(axis=1)
+
+    def _hand_over(self, movers: np.ndarray, wanderers: np.ndarray) -> None:
+        """A wanderer resting on the target of the mover it blocks takes the target (it
+        settles there this step) and the mover wanders in its place. Boxed in by settled robots
+        inside a re-formed shape, the wanderer could never step aside: a square with a tenth
+        removed early, under `random`, kept four movers in a row waiting on it for good. The
+        mover it replaces may be boxed in on the next mover's target in turn, and so on out."""
+        self.assign(wanderers, self.target[movers].copy())
+        self.release(movers)
 
     def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
         """The settled robot takes the mover's target and moves on; the mover takes its cell."""
