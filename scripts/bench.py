@@ -101,8 +101,9 @@ def cells_for(case: Case) -> int:
     return cells
 
 
-def world_of(grid: np.ndarray) -> World:
-    return build_world([GroupSpec("bench", Shape(grid), COLOUR, None)])
+def world_of(grid: np.ndarray, agents: int | None = None) -> World:
+    """One group forming `grid`, with `agents` robots (default: one per cell)."""
+    return build_world([GroupSpec("bench", Shape(grid), COLOUR, agents)])
 
 
 class Watch(Observer):

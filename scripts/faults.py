@@ -7,7 +7,8 @@ filled again. Separately, the disc is formed from scratch under a steady failure
 ``docs/faults.json``, ``docs/fault-coverage.png`` (coverage through a fault; needs the plot
 extra) and ``docs/faults-healing.png`` (a disc healing, drawn offscreen).
 
-    .venv/bin/python scripts/faults.py [--strategies optimal greedy random paper] [--quick]
+    .venv/bin/python scripts/faults.py [--strategies optimal greedy random paper] [--cells 1000]
+        [--out docs/faults.json] [--no-pictures | --pictures-only]
 """
 
 from __future__ import annotations
