@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from swarmshape.core.lattice import FREE
-from swarmshape.core.states import MOVING
-from swarmshape.core.tswap import ring_members, rotate_rings, settled_swaps
+from swarmshape.core.states import MOVING, SETTLED, WAITING
+from swarmshape.core.tswap import one_per_blocker, ring_members, rotate_rings
 from tests.conftest import grid_from, make_swarm
 
 
@@ -23,18 +23,18 @@ def test_a_chain_without_a_ring_has_no_members():
 def test_each_ring_member_hands_its_target_to_the_robot_it_waits_for():
     target = np.array([10, 11, 12, 13, 14])
     waiting, waited_for = np.array([0, 1, 2, 3]), np.array([1, 2, 0, 2])
-    receivers, targets = rotate_rings(target, waiting, waited_for)
-    target[receivers] = targets
+    givers, receivers = rotate_rings(waiting, waited_for)
+    target[receivers] = target[givers]
     assert target.tolist() == [12, 10, 11, 13, 14], "3 is not on the ring; 4 never waited"
 
 
 def test_one_waiting_robot_is_no_ring():
-    receivers, _ = rotate_rings(np.arange(3), np.array([0]), np.array([0]))
+    _, receivers = rotate_rings(np.array([0]), np.array([0]))
     assert len(receivers) == 0
 
 
-def test_a_settled_robot_swaps_with_only_one_mover_per_step():
-    movers, settled = settled_swaps(np.array([5, 6, 7]), np.array([9, 9, 8]))
+def test_a_blocker_trades_with_only_one_mover_per_step():
+    movers, settled = one_per_blocker(np.array([5, 6, 7]), np.array([9, 9, 8]))
     assert sorted(zip(movers.tolist(), settled.tolist(), strict=True)) == [(5, 9), (7, 8)]
 
 
@@ -63,3 +63,33 @@ def test_rotating_a_ring_does_not_reset_the_waiting_time():
     steering.decide()
     assert steering.target.tolist() == [goes_left, goes_right], "the ring passed its targets round"
     assert steering.blocked.tolist() == [3, 3], "their waiting time kept counting"
+
+
+def test_a_mover_that_just_traded_targets_does_not_also_swap_with_a_settled_robot():
+    """A mover blocked by a settled robot, and a mover behind it that shortens both trips by
+    trading targets with it, in one step: the traded target came to rest on the first mover's
+    own cell, and swapping it on to the settled robot as well set three robots trading
+    round a loop for good (a block with 5 % stalled early, under `random`)."""
+    swarm = make_swarm(grid_from("#### ####"), seed=1, strategy="optimal")
+    steering = swarm.driver
+    targets = swarm.world.targets
+    corner = targets.min(axis=0)
+
+    def target_at(dx, dy):
+        return int(np.flatnonzero((targets == corner + np.array([dx, dy])).all(axis=1))[0])
+
+    settled, front, behind = 0, 1, 2
+    for robot, (dx, dy) in zip((settled, front, behind), [(2, 0), (3, 0), (3, 1)], strict=True):
+        place(swarm, robot, corner + np.array([dx, dy]))
+    swarm.state[:] = WAITING  # the other five wait outside
+    swarm.state[:3] = [SETTLED, MOVING, MOVING]
+    swarm.filled[:] = False
+    swarm.filled[target_at(2, 0)] = True
+    swarm.direction[front] = 2  # heading -x, into the settled robot
+    steering.target[:] = -1
+    steering.target[:3] = [target_at(2, 0), target_at(0, 1), target_at(3, 0)]
+    steering.blocked[:] = 0
+    steering.decide()
+    assert steering.target[behind] == target_at(0, 1), "the two movers traded targets"
+    assert steering.target[front] == target_at(3, 0)
+    assert swarm.state[settled] == SETTLED and steering.target[settled] == target_at(2, 0)

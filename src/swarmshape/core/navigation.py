@@ -151,6 +151,10 @@ class FieldPlanner:
     def planned(self, agents: np.ndarray) -> np.ndarray:
         return self._row_of[agents] > 0
 
+    def remaining(self, agents: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        """Steps from `cells` to each agent's goal along its field (inf where none leads)."""
+        return self._rows[self._row_of[agents], cells[:, 0] * self.size[1] + cells[:, 1]]
+
     def forget(self, agents: np.ndarray) -> None:
         rows = self._row_of[agents]
         self._spare.extend(np.unique(rows[rows > 0]).tolist())

@@ -10,6 +10,8 @@ Pure functions over robot indices and targets, so the rules can be tested on the
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 
@@ -28,47 +30,45 @@ def ring_members(waiting: np.ndarray, waited_for: np.ndarray, robots: int) -> np
     return np.unique(reached[reached >= 0])
 
 
-def rotate_rings(
-    target: np.ndarray, waiting: np.ndarray, waited_for: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """``(receivers, targets)``: on every ring, each robot hands its target to the robot it
-    waits for; apply with ``target[receivers] = targets``.
+def rotate_rings(waiting: np.ndarray, waited_for: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(givers, receivers)``: on every ring, each robot hands its target to the robot it
+    waits for.
 
     The robot waited for stands in the way to the waiting robot's target, one cell closer to
     it, so taking that target over shortens the trip (TSWAP's rotation).
     """
     if len(waiting) < 2:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=target.dtype)
-    members = ring_members(waiting, waited_for, len(target))
-    waits_for = np.full(len(target), -1)
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    robots = int(max(waiting.max(), waited_for.max())) + 1
+    members = ring_members(waiting, waited_for, robots)
+    waits_for = np.full(robots, -1)
     waits_for[waiting] = waited_for
-    return waits_for[members], target[members]
+    return members, waits_for[members]
 
 
-def settled_swaps(movers: np.ndarray, settled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(movers, settled)`` pairs that swap targets: each settled robot with the first mover
-    blocked by it, so no robot takes part in two swaps in one step."""
-    _, first = np.unique(settled, return_index=True)
-    return movers[first], settled[first]
+def one_per_blocker(movers: np.ndarray, blockers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(movers, blockers)`` pairs that trade targets: each blocker with the first mover
+    blocked by it, so no robot takes part in two trades in one step."""
+    _, first = np.unique(blockers, return_index=True)
+    return movers[first], blockers[first]
 
 
 def shortening_swaps(
-    waiting: np.ndarray, waited_for: np.ndarray, cell: np.ndarray, goal: np.ndarray
+    waiting: np.ndarray,
+    waited_for: np.ndarray,
+    cell: np.ndarray,
+    trip: Callable[[np.ndarray, np.ndarray], np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(waiting, waited_for)`` pairs of neighbours that should trade goals (local task
     swapping, Wang and Rubenstein, IEEE T-RO 2020): those where trading shortens their summed
-    lattice distance, or keeps it and brings the waiting robot nearer its goal. Crossing lanes
-    tangle into long chains of robots each waiting on the next, and crossing paths in lattice
-    distance often tie; a trade usually sends both the way that is free. No robot is in two
-    pairs."""
-
-    def apart(robots: np.ndarray, goals: np.ndarray) -> np.ndarray:
-        return np.abs(cell[robots] - goals).sum(axis=1)
-
-    own = apart(waiting, goal[waiting])
-    taken = apart(waiting, goal[waited_for])
-    now = own + apart(waited_for, goal[waited_for])
-    traded = taken + apart(waited_for, goal[waiting])
+    trips, or keeps them and brings the waiting robot nearer its goal. ``trip(robots, cells)``
+    is how far each robot's goal lies from `cells`. Crossing lanes tangle into long chains of
+    robots each waiting on the next, and crossing paths often tie; a trade usually sends both
+    the way that is free. No robot is in two pairs."""
+    own = trip(waiting, cell[waiting])
+    taken = trip(waited_for, cell[waiting])
+    now = own + trip(waited_for, cell[waited_for])
+    traded = taken + trip(waiting, cell[waited_for])
     pairs = np.flatnonzero((traded < now) | ((traded == now) & (taken < own)))
     everyone = np.concatenate([waiting[pairs], waited_for[pairs]])
     once = np.bincount(everyone, minlength=len(cell))[everyone] == 1
