@@ -2,8 +2,9 @@
 
 python scripts/success.py sweeps/self-assembly-noise.csv --iou 0.9
 
-A run succeeds when its coverage is 1.0 or, with ``--iou``, its IoU reaches that value (a
-program that grows from its seeds may form an imperfect shape: Rubenstein et al.'s measure).
+A run succeeds when it formed its shape (every target filled but those lost to stalled
+robots: its ``steps`` column is set) or, with ``--iou``, its IoU reaches that value (a program
+that grows from its seeds may form an imperfect shape: Rubenstein et al.'s measure).
 One line per setting (every ``config.`` column but the seed): runs, successes, steps and IoU.
 """
 
@@ -53,7 +54,7 @@ def main() -> int:
 
 
 def _formed(row: dict[str, str], iou: float | None) -> bool:
-    return float(row["coverage"]) == 1.0 or (iou is not None and float(row["iou"]) >= iou)
+    return row["steps"] != "" or (iou is not None and float(row["iou"]) >= iou)
 
 
 if __name__ == "__main__":
