@@ -5,7 +5,11 @@ Pure functions over robot indices and targets, so the rules can be tested on the
 - a mover blocked by a settled robot of its group swaps targets with it (the settled robot moves
   on inward, the mover takes its cell), so a target walled in by others is passed inward;
 - movers at rest that wait for each other in a ring pass their targets one step round the ring,
-  which shortens every trip, so a deadlock cycle dissolves.
+  which shortens every trip, so a deadlock cycle dissolves;
+- and, from local task swapping, a mover trades targets with the mover it waits for when that
+  shortens their trips.
+
+Each blocker takes part in one trade per step (`one_per_blocker`).
 """
 
 from __future__ import annotations
