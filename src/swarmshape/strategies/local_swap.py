@@ -310,7 +310,11 @@ def _open_in_sight(
     reshape or a fault the open cells have no holder, and only robots that look for them can
     fill them. Its own cell counts (a robot standing on an open cell claims it), its own goal
     does not, nor one it has just traded away (its partner's message saying so is a step
-    behind; a robot pushed out of its cell claimed it straight back)."""
+    behind; a robot pushed out of its cell claimed it straight back). A robot on the move sees
+    none: it senses its neighbours from between two cells, and rounded to cells they showed a
+    filled cell open each time it moved; a seeker with 10 % of messages lost turned to that
+    cell and back to its news every few steps, never counted as stuck, and so never went
+    round the shape to the open cells (a star, seed 3)."""
     recent = memory.gave & (memory.since_trade < TABU)
     disc = _disc(radius)
     n, reach = len(sense), int(radius)
@@ -331,7 +335,7 @@ def _open_in_sight(
         near = (np.abs(relative) <= reach).all(axis=1)
         slot = index[relative[near, 0] + reach, relative[near, 1] + reach]
         taken[rows[near][slot >= 0], slot[slot >= 0]] = True
-    free = inside & ~taken & memory.localised[:, None]
+    free = inside & ~taken & (memory.localised & sense.ready)[:, None]
     nearest = free.argmax(axis=1)
     return cells[np.arange(n), nearest], free.any(axis=1), inside.any(axis=1)
 
