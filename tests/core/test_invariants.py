@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from swarmshape.check import InvariantWatch
@@ -58,6 +58,12 @@ def test_invariants_hold_at_every_step(strategy, bits, spare, room, seed):
     assert np.array_equal(swarms[0].state, swarms[1].state)
 
 
+STALLED_ON_A_GOAL = [
+    [bit == "#" for bit in "##.#.#.###...##.#.#."],
+    [bit == "#" for bit in "##...#.###...##.#.#."],
+]
+
+
 @pytest.mark.parametrize("strategy", STRATEGIES)
 @settings(deadline=None, max_examples=max(1, settings().max_examples // (3 * len(STRATEGIES))))
 @given(
@@ -80,6 +86,14 @@ def test_invariants_hold_at_every_step(strategy, bits, spare, room, seed):
         max_size=3,
     ),
     rate=st.sampled_from([0.0, 0.0, 0.002]),
+)
+# hypothesis found both: local-swap robots kept goals under robots stalled at step 32, and one
+# waited beside its goal for ever, the other traded it into the formed shape
+@example(
+    bits=STALLED_ON_A_GOAL[0], spare=-2, seed=579, events=[(32, "stall", 0.3391, None)], rate=0.0
+)
+@example(
+    bits=STALLED_ON_A_GOAL[1], spare=-2, seed=0, events=[(32, "stall", 0.3391, None)], rate=0.0
 )
 def test_invariants_hold_through_random_faults(strategy, bits, spare, seed, events, rate):
     """Random fault events and failure rates: no overlaps, robots conserved except those

@@ -86,6 +86,10 @@ REVERSE = np.array([0, 2, 1, 4, 3])
 BIG = 1 << 40
 """Farther than any cell."""
 
+SILENCE = 10
+"""Steps a robot sees its goal's cell taken by a robot it does not hear before it gives the
+goal up (see `_give_up_to_the_silent`)."""
+
 
 @register
 class LocalSwap(Program):
@@ -116,6 +120,7 @@ class LocalSwap(Program):
         "heard": Slot(np.int64, 0, 2),
         "heard_hops": Slot(np.int64, FAR),
         "routed": Slot(bool, False),
+        "silence": Slot(np.int64, 0),
     }
 
     def act(
@@ -127,6 +132,8 @@ class LocalSwap(Program):
         twice, twice_cell = _held_twice(sense, rested)
         _yield_taken(sense, memory)
         _trade(sense, memory)
+        silent = _silent_cells(sense, memory)
+        _give_up_to_the_silent(sense, memory, silent)
         memory.has_goal &= sense.blueprint.contains(sense.group, memory.goal)  # a reshape
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
@@ -159,7 +166,7 @@ class LocalSwap(Program):
         delta = waypoint - memory.frame
         preferred, first = _plan(sense, delta, behind, going, self.senses.radius)
         memory.wants = _choose_partner(
-            sense, memory, preferred, target, seeking, news, news_hops, rested
+            sense, memory, preferred, target, seeking, news, news_hops, rested, silent
         )
         moves = _go_round(memory, delta, preferred, first, occupied, going & sense.ready, rng)
         astray = going & sense.ready & (memory.stuck > STUCK) & ~memory.routed
@@ -634,6 +641,7 @@ def _choose_partner(
     news: np.ndarray,
     news_hops: np.ndarray,
     rested: np.ndarray,
+    silent: np.ndarray,
 ) -> np.ndarray:
     """The neighbour each robot wants to trade goals with next step (its number), or -1: one
     that shortens their summed distance, one at rest in its way (robots that each wait for
@@ -643,7 +651,9 @@ def _choose_partner(
     neighbour on the move too (both hold still for it): two robots that met head-on in a
     corridor each stepped aside for the other, in step, and never once both stood still to
     trade. A robot never trades for a goal it knows a third robot rests on (see
-    `_held_twice`)."""
+    `_held_twice`), nor, resting on its own goal, for one it sees a robot on that it does not
+    hear (`_silent_cells`): a robot that held a goal under a stalled robot traded it into the
+    formed shape, whose robot then left its cell for it."""
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me]
@@ -678,6 +688,8 @@ def _choose_partner(
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
     again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
     held = their_has & ~resting_there & np.isin(_key(me, their_cell), rested)
+    settled = my_has & (mine == my_cell).all(axis=1)
+    held |= settled & their_has & np.isin(_key(me, their_cell), silent)
     score = np.where(talk & ~same & ~again & ~held, score, 0)
     best = _best_per_robot(len(sense), me, -score, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
@@ -699,6 +711,28 @@ def _trade(sense: Perception, memory: Memory) -> None:
     memory.since_trade += 1
     memory.partner[me[mutual]] = msg[mutual, NUMBER]
     memory.since_trade[me[mutual]] = 0
+
+
+def _silent_cells(sense: Perception, memory: Memory) -> np.ndarray:
+    """Sorted keys (`_key`) of each robot and the frame cells it sees a robot on that it does
+    not hear. A stalled robot is silent and holds its cell for good; a live one goes unheard
+    now and then when messages are lost."""
+    me = sense.owner
+    unheard = ~sense.heard & ~sense.seed
+    cells = memory.frame[me[unheard]] + np.rint(sense.offset[unheard]).astype(np.int64)
+    return np.unique(_key(me[unheard], cells))
+
+
+def _give_up_to_the_silent(sense: Perception, memory: Memory, silent: np.ndarray) -> None:
+    """Give up a goal whose cell a robot it does not hear has sat on for `SILENCE` steps: a
+    goal under a stalled robot can never be reached, and a robot that kept it waited beside
+    it for ever. A live robot goes unheard that long only with chance ``msg_loss **
+    SILENCE``, and then its cell is merely open again to seekers. Only a step at rest, when
+    offsets are whole cells, clears the count."""
+    robots = np.arange(len(sense))
+    seen = memory.localised & memory.has_goal & np.isin(_key(robots, memory.goal), silent)
+    memory.silence = np.where(seen, memory.silence + 1, np.where(sense.ready, 0, memory.silence))
+    memory.has_goal &= memory.silence < SILENCE
 
 
 def _roam(
