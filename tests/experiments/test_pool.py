@@ -57,6 +57,12 @@ def wait_for(condition, seconds: float):
     return condition()
 
 
+def _as_in_a_terminal() -> None:
+    """Ctrl+C as a terminal delivers it: a suite started in the background (``nohup ... &``)
+    ignores SIGINT, and a child inherits that, so the sweep never heard it."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start_sweep(tmp_path, strategies: str) -> tuple[subprocess.Popen, Path]:
     """A sweep in its own process group; its output goes to files (pipes would be held open
     by any worker left behind)."""
@@ -64,7 +70,13 @@ def start_sweep(tmp_path, strategies: str) -> tuple[subprocess.Popen, Path]:
     path.write_text(SLOW.format(strategies=strategies))
     command = [sys.executable, "-m", "swarmshape", "sweep", str(path), "--workers", "2"]
     with (tmp_path / "stdout").open("w") as stdout, (tmp_path / "stderr").open("w") as stderr:
-        process = subprocess.Popen(command, stdout=stdout, stderr=stderr, start_new_session=True)
+        process = subprocess.Popen(
+            command,
+            stdout=stdout,
+            stderr=stderr,
+            start_new_session=True,
+            preexec_fn=_as_in_a_terminal,
+        )
     return process, path.with_suffix(".csv")
 
 
