@@ -18,9 +18,10 @@ from swarmshape.core.faults import (
     parse_region,
 )
 from swarmshape.core.metrics import run_metrics
+from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.states import LOST, SETTLED, STALLED
 from swarmshape.core.swarm import Swarm
-from swarmshape.core.world import build_world
+from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import Runner, configure, load_world, resume, save, start_cells, start_swarm
 from swarmshape.strategies import available, create
@@ -124,6 +125,38 @@ def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
     Runner(swarm, max_steps=2500).finish()
     assert (swarm.state == STALLED).sum() == 5 and swarm.faults.log[-1]["scale"] < 0.8
     assert swarm.complete and swarm.filled.any()
+
+
+@pytest.mark.parametrize("rotation", [0, 90])
+@pytest.mark.parametrize("strategy", REPAIRING)
+def test_a_shape_dead_at_every_copy_where_it_stands_re_forms_nearby(strategy, rotation):
+    """A formed 3x3 square: robots stall on its 2x2 corner by the seeds and one more is
+    removed, so the 4 that can move cannot fill the 5 cells left, and every smaller copy (all
+    at the same origin) is held by the stalled robots. The survivors form the largest copy
+    they can fill, 2x2, at the nearest place they reach: two cells along the frame's x axis
+    (its twin two down ties, and loses to the lower y), whichever way the frame is turned."""
+    pose = Pose(12, 12, rotation)
+    world = build_world(
+        [GroupSpec("g", Shape(np.ones((3, 3), bool)), (1, 2, 3), 9, pose)], (26, 26)
+    )
+    swarm = Swarm(world, create(strategy), 3)
+    watch = InvariantWatch()
+    Runner(swarm, [watch], max_steps=5000).finish()
+    assert swarm.complete
+    robot_on = {tuple(pose.to_frame(cell[None])[0]): robot for robot, cell in enumerate(swarm.cell)}
+    corner = [robot_on[cell] for cell in [(0, 0), (1, 0), (0, 1), (1, 1)]]
+    swarm.fail(np.array(corner), "stall")
+    assert swarm.complete and swarm.world.groups[0].shape.count == 9, "5 robots fill the rest"
+    swarm.fail(np.array([robot_on[2, 2]]))
+    shape = swarm.world.groups[0].shape
+    assert shape.count == 4 and shape.grid.all() and shape.scale < 1
+    assert shape.origin == (2, 0)
+    assert not np.isin(swarm.lattice.grid[tuple(swarm.world.targets.T)], corner).any()
+    Runner(swarm, [watch], max_steps=swarm.step_count + 5000).finish()
+    assert watch.problems == [] and swarm.overlap_total == 0
+    assert swarm.complete and swarm.filled.all() and not swarm.dead.any()
+    assert (swarm.state[corner] == STALLED).all()
+    assert swarm.faults.log[-1]["recovered_at"] is not None
 
 
 @pytest.mark.parametrize(

@@ -95,6 +95,16 @@ STALLED_ON_A_GOAL = [
 @example(
     bits=STALLED_ON_A_GOAL[1], spare=-2, seed=0, events=[(32, "stall", 0.3391, None)], rate=0.0
 )
+# hypothesis found it: a stall on the one cell left after removals at step 0 left no copy to
+# re-form at the seeds, so the run never formed nor ended stranded
+@example(
+    bits=[bit == "#" for bit in "#..#...#..#.#..#.#.#"],
+    spare=-3,
+    seed=946,
+    events=[(120, "stall", 0.39587348908824527, None), (0, "remove", 0.08094609668464764, None),
+            (0, "remove", 0.5900099683931079, None)],
+    rate=0.0,
+)  # fmt: skip
 def test_invariants_hold_through_random_faults(strategy, bits, spare, seed, events, rate):
     """Random fault events and failure rates: no overlaps, robots conserved except those
     removed, settled robots stay, the same run per seed, and the shape heals or rescales.

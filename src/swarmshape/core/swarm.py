@@ -9,7 +9,7 @@ never imports pygame.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -557,7 +557,8 @@ class Swarm:
     def _rescale_if_short(self, group: int) -> None:
         """Too few robots left to fill the group's reachable cells, or none of them left to
         fill: form the same shape at the largest scale the survivors can fill and reach (the
-        paper's answer to too few robots, live; stalled robots may wall off a small copy)."""
+        paper's answer to too few robots, live; stalled robots may wall off a small copy). If
+        every copy where the shape stands is dead, the survivors form one nearby instead."""
         mobile = int((self._mobile() & (self.group == group)).sum())
         shape, pose = self.world.groups[group].shape, self.world.groups[group].pose
         reachable = self._reachable(group)
@@ -569,8 +570,45 @@ class Swarm:
         if mobile < 1 or 1 <= fillable(shape) <= mobile:
             return
         smaller = next((s for s in shape.shrunk() if 1 <= fillable(s) <= mobile), None)
+        if smaller is None:
+            smaller = self._moved_copy(group, mobile, reachable)
         if smaller is not None:
             self.reshape(group, smaller)
+
+    def _moved_copy(self, group: int, mobile: int, reachable: np.ndarray) -> Shape | None:
+        """The largest copy of the group's shape with at most `mobile` cells that fits, every
+        cell reachable and off the other groups' shapes, somewhere in the arena, at the place
+        nearest where it stands (by how far its origin moves, ties to the least frame y, then
+        x); None if there is no such place. Without it, robots stalled on (or walling off) every
+        copy at the seeds leave a shape that never forms, with robots that can still move."""
+        from scipy import signal  # only here: it costs half a second to import
+
+        shape, pose = self.world.groups[group].shape, self.world.groups[group].pose
+        width, height = self.world.size
+        owner = self.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
+        room = (reachable & ((owner < 0) | (owner == group))).astype(np.int64)
+        if not room.any():
+            return None
+        for copy in (shape, *shape.shrunk()):
+            if copy.count > mobile:
+                continue
+            cells = pose.to_world(copy.cells)
+            low = cells.min(axis=0)
+            footprint = np.zeros(tuple(cells.max(axis=0) - low + 1), dtype=np.int64)
+            if footprint.shape[0] > width or footprint.shape[1] > height:
+                continue
+            footprint[cells[:, 0] - low[0], cells[:, 1] - low[1]] = 1
+            # for every place of the copy's corner in the arena at once: its cells there in room
+            inside = signal.correlate(room, footprint, mode="valid")
+            corners = np.argwhere(inside == copy.count)
+            if not len(corners):
+                continue
+            # the world shift, turned back into the frame (a shift is a vector: no cell rounding)
+            moved = pose.to_frame(cells[0] + corners - low) - pose.to_frame(cells[:1])
+            far = (moved**2).sum(axis=1)
+            dx, dy = moved[np.lexsort((moved[:, 0], moved[:, 1], far))[0]]
+            return replace(copy, origin=(copy.origin[0] + int(dx), copy.origin[1] + int(dy)))
+        return None
 
     def _whole(self, group: int) -> bool:
         """Every target of `group` is filled or lost to stalled robots (see `dead`), and not
