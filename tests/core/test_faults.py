@@ -314,3 +314,32 @@ def test_a_group_left_with_no_robot_that_can_move_ends_the_run_once_the_other_ha
     Runner(swarm, max_steps=5000).finish()
     assert swarm.stranded and not swarm.complete and swarm.step_count < 5000
     assert swarm.completed_at[0] is None and swarm.completed_at[1] is not None
+
+
+def _one_cell_beside(starts: list[tuple[int, int]], agents: int, strategy: str) -> Swarm:
+    """Group 0 forms one cell at (4, 4), its seeds on two sides; group 1 a 2x2 square away
+    from it. Group 0's two robots and the first of group 1's start at `starts`."""
+    cell = Shape(np.ones((1, 1), bool))
+    specs = [
+        GroupSpec("a", cell, (1, 2, 3), 2, Pose(4, 4)),
+        GroupSpec("b", Shape(np.ones((2, 2), bool)), (3, 2, 1), agents, Pose(14, 4)),
+    ]
+    world = build_world(specs, (24, 16))
+    rest = [(14 + 2 * k, 10) for k in range(2 + agents - len(starts))]
+    return Swarm(world, create(strategy), 1, start=np.array([*starts, *rest]))
+
+
+@pytest.mark.parametrize("strategy", REPAIRING)
+def test_a_stall_in_one_group_that_walls_off_another_re_forms_that_one(strategy):
+    """Group 1's robots stall on the two open sides of group 0's one cell: group 0, struck by
+    nothing, is left with no cell to fill and must be re-formed too, at the nearest cell its
+    robots reach (of the two a diagonal step away, the one under the seeds: frame x -1 < 1),
+    rather than wait for ever."""
+    swarm = _one_cell_beside([(10, 12), (12, 12), (5, 4), (4, 5)], 6, strategy)
+    swarm.fail(np.array([2, 3]), "stall")
+    assert swarm.world.groups[0].shape.origin == (-1, 1)
+    assert swarm.world.targets[swarm.world.target_group == 0].tolist() == [[3, 5]]
+    watch = InvariantWatch()
+    Runner(swarm, [watch], max_steps=3000).finish()
+    assert watch.problems == [] and swarm.overlap_total == 0
+    assert swarm.complete and swarm.step_count < 3000

@@ -501,7 +501,7 @@ class Swarm:
         self.dead = self._find_dead()
         self.driver.removed(robots, stall)
         groups = np.unique(self.group[robots]).tolist()
-        for g in groups:
+        for g in range(len(self.world.groups)):  # a stall may wall off another group's cells
             self._rescale_if_short(g)
         for g in groups:
             if not self._whole(g):
