@@ -343,3 +343,18 @@ def test_a_stall_in_one_group_that_walls_off_another_re_forms_that_one(strategy)
     Runner(swarm, [watch], max_steps=3000).finish()
     assert watch.problems == [] and swarm.overlap_total == 0
     assert swarm.complete and swarm.step_count < 3000
+
+
+def test_survivors_that_stand_only_on_another_groups_shape_end_the_run_stranded():
+    """Group 0's one cell is held by its stalled robot, and its other robot is boxed in by
+    stalled robots on a cell that a live change gave group 1: there is no cell anywhere it
+    can fill, so once group 1 has formed nothing can change, and the run ends stranded."""
+    swarm = _one_cell_beside([(4, 4), (4, 5), (3, 5), (5, 5), (4, 6)], 7, "optimal")
+    pose = swarm.world.groups[1].pose
+    frame = np.concatenate([swarm.world.groups[1].frame_cells, pose.to_frame(np.array([[4, 5]]))])
+    swarm.reshape(1, Shape.from_cells(frame))
+    swarm.fail(np.array([0, 2, 3, 4]), "stall")
+    assert swarm.world.groups[0].shape.origin == (0, 0) and swarm.dead[0]
+    Runner(swarm, max_steps=3000).finish()
+    assert swarm.stranded and not swarm.complete and swarm.step_count < 3000
+    assert swarm.completed_at[1] is not None and (swarm.state == SETTLED).sum() == 4

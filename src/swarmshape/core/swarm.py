@@ -305,10 +305,19 @@ class Swarm:
     @property
     def stranded(self) -> bool:
         """A shape is not whole and nothing can change any more: every group's shape is whole,
-        or faults left the group no robot that can move or is still under way."""
+        or faults left the group no robot that can move or is still under way, or no target
+        its robots can reach while no stalled robot coasts and no failure rate may open one
+        (re-forming leaves that only when every robot that can move stands on another group's
+        shape, where a live change to that shape may have put it)."""
         able = ((self.state != LOST) & (self.state != STALLED)) | (self.ahead > 0)
+        walls_set = self.faults.rate == 0 and not (self.ahead[self.state == STALLED] > 0).any()
         groups = range(len(self.world.groups))
-        done = [self._whole(g) or not able[self.group == g].any() for g in groups]
+        done = [
+            self._whole(g)
+            or not able[self.group == g].any()
+            or (walls_set and self.dead[self.world.target_group == g].all())
+            for g in groups
+        ]
         return all(done) and not all(self._whole(g) for g in groups)
 
     @property
