@@ -24,16 +24,18 @@ from swarmshape.core.perception import Blueprint, Perception, box_lookup
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
 
-LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY = range(
-    16
-)
+(
+    LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
+    SX, SY, SEEKER_HOPS,
+) = range(19)  # fmt: skip
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
 GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
 robot (0 if localised), a gradient the lost ones climb down. OX, OY, OPEN_HOPS: a shape cell
 that nobody sits on or holds, and hops to the robot that sees it (see `_relay_open`). TWICE,
 TX, TY: a goal it hears held twice, by a robot at rest on it and one still on its way (see
-`_held_twice`)."""
+`_held_twice`). SX, SY, SEEKER_HOPS: a robot without a goal that calls open cells to it, and
+hops to it (see `_relay_seekers`)."""
 
 FAR = 1000
 """HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
@@ -48,11 +50,14 @@ LOYALTY = 2
 in a horseshoe's bay, with open cells at the ends of both arms, heard of the other one every
 few steps, turned each time, and never reached either."""
 
-LOST_REACH = 24
+LOST_REACH = 64
 """Hops to a localised robot past which a robot counts as hearing of none. Three robots that
 lost their bearings far from the others each heard the other two tell of a way back that ran
 through itself, and counted up to `FAR` one hop a step before they set out to search, for a
 thousand steps."""
+
+ROAM = 20
+"""Cells a robot that hears of no localised robot walks straight on average (see `_roam`)."""
 
 PATIENCE = 4
 """Steps a robot waits behind something before it goes round it (see `_go_round`)."""
@@ -86,6 +91,10 @@ REVERSE = np.array([0, 2, 1, 4, 3])
 BIG = 1 << 40
 """Farther than any cell."""
 
+ROUNDABOUT = 2
+"""How many times the straight way a stuck robot's way round the shape to an open cell must be
+before it calls open cells to it (see `_cut_off`)."""
+
 SILENCE = 10
 """Steps a robot sees its goal's cell taken by a robot it does not hear before it gives the
 goal up (see `_give_up_to_the_silent`)."""
@@ -95,7 +104,7 @@ goal up (see `_give_up_to_the_silent`)."""
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 16
+    message_size = 19
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -121,6 +130,7 @@ class LocalSwap(Program):
         "heard_hops": Slot(np.int64, FAR),
         "routed": Slot(bool, False),
         "silence": Slot(np.int64, 0),
+        "calling": Slot(bool, False),
     }
 
     def act(
@@ -145,7 +155,9 @@ class LocalSwap(Program):
         target[blind] = _nearest_cell(sense, memory, blind)
         here = (target == memory.frame).all(axis=1)
         resting = memory.has_goal & (memory.goal == memory.frame).all(axis=1)
-        way = _deeper(sense, memory, occupied)
+        memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
+        seeker, seeker_hops = _relay_seekers(sense, memory, memory.calling)
+        way = _deeper(sense, memory, occupied, seeker, seeker_hops)
         deepen = memory.localised & sense.ready & (way > 0) & (resting | seeking & open_cell & here)
         memory.goal[deepen] = memory.frame[deepen] + STEPS[way[deepen]]
         memory.has_goal[deepen] = True
@@ -176,8 +188,9 @@ class LocalSwap(Program):
         hops, toward = _hops(sense, memory)
         lost = ~memory.localised
         moves[lost] = np.where(occupied[lost, toward[lost]], 0, toward[lost])
+        memory.roam[lost & (toward > 0)] = toward[lost & (toward > 0)]
         roaming = lost & (hops >= FAR)
-        moves[roaming] = _roam(memory, occupied, roaming, rng)
+        moves[roaming] = _roam(sense, memory, occupied, roaming, rng)
         wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
         moves[wander] = _random_free(occupied[wander], rng)
         memory.asked = np.where(sense.ready, moves, 0)
@@ -196,6 +209,8 @@ class LocalSwap(Program):
                 np.minimum(news_hops, FAR),
                 twice,
                 twice_cell,
+                seeker,
+                np.minimum(seeker_hops, FAR),
             ]
         ).astype(np.int64)
         return moves, messages
@@ -208,15 +223,18 @@ class LocalSwap(Program):
 
 
 def _note_progress(memory: Memory, target: np.ndarray) -> None:
-    """Count the steps since each robot last came nearer its target; a new target starts
-    the count afresh. A robot with nowhere to go keeps its count and its target: a seeker in
-    a letter S's bay lost sight of its open cell every few steps, for a step, and so never
-    counted as stuck."""
+    """Count the steps since each robot last came nearer its target. A new target is measured
+    afresh, but restarts the count only if the robot is nearer it than it came to the old one:
+    two robots in a horseshoe's bay, each turning between the two open cells beyond its top
+    bar as the other one's news came and went, never counted as stuck, and never went round.
+    A robot with nowhere to go keeps its count and its target: a seeker in a letter S's bay
+    lost sight of its open cell every few steps, for a step, and so never counted as stuck.
+    One on its goal is not stuck, whatever it met on its way there."""
     left = np.abs(target - memory.frame).sum(axis=1)
     aiming = left > 0
     new = aiming & (target != memory.aim).any(axis=1)
-    nearer = aiming & (left < memory.closest)
-    memory.stuck = np.where(new | nearer, 0, memory.stuck + aiming)
+    nearer = aiming & (left < memory.closest) | memory.at_goal
+    memory.stuck = np.where(nearer, 0, memory.stuck + aiming)
     memory.closest = np.where(new | nearer, left, memory.closest)
     memory.aim[aiming] = target[aiming]
 
@@ -410,27 +428,84 @@ def _nearest_cell(sense: Perception, memory: Memory, rows: np.ndarray) -> np.nda
     return target
 
 
-def _deeper(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarray:
-    """Per robot, the way to an adjacent open cell deeper in the shape than its own (depth:
-    steps to the nearest cell outside the shape), or 0. Filling from the inside out is our
-    lattice addition, not the paper's: a robot resting on the shape steps into a deeper
-    hole and leaves its own cell open one step nearer the rim, so holes that faults punch
-    into a formed shape surface where spare robots reach them, and robots that claim the
-    rim of new rows never wall the inner row in. Each such step raises the summed depth of
-    occupied cells, so it ends."""
+def _cut_off(
+    sense: Perception, memory: Memory, seeking: np.ndarray, target: np.ndarray
+) -> np.ndarray:
+    """Robots without a goal, outside the shape and stuck, that the shape walls off from the
+    open cell they head for, or whose way round to it is more than `ROUNDABOUT` times the
+    straight way (`routes.ways`): they call the open cells to them (see `_deeper`) until they
+    have a goal. One that could walk there does not, so robots on cells a reshape keeps stay
+    put while spare ones fill the new rows. One that called only while stuck stopped each
+    time the open cell came nearer, and the robots that did not hear it sent it back: in a
+    ring's hole the open cell went up and down the ring's side for good."""
+    rows = np.flatnonzero(seeking & (memory.stuck > STUCK) & (target != memory.frame).any(axis=1))
+    rows = rows[~sense.blueprint.contains(sense.group[rows], memory.frame[rows])]
+    frame, group = memory.frame[rows], sense.group[rows]
+    walked, walled = routes.ways(sense.blueprint, group, frame, target[rows])
+    straight = np.abs(target[rows] - frame).sum(axis=1)
+    calling = np.zeros(len(sense), dtype=bool)
+    calling[rows] = np.isfinite(walked) & ((walled > 0) | (walked > ROUNDABOUT * straight))
+    return calling
+
+
+def _relay_seekers(
+    sense: Perception, memory: Memory, calling: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A robot that calls open cells to it (`calling`, see `_cut_off`) that each robot knows
+    of, and hops to it (0: itself, FAR: none): its own cell, or the one its neighbours tell of
+    with fewest hops. One that gets a goal stops calling, and the news of it dies out by
+    counting up to `OPEN_REACH`."""
+    me, msg = sense.owner, sense.message
+    news = sense.heard & sense.kin & ~sense.seed & (msg[:, SEEKER_HOPS] < OPEN_REACH)
+    news &= memory.localised[me]
+    best = _best_per_robot(len(sense), me, msg[:, SEEKER_HOPS], news)
+    told = (best >= 0) & ~calling
+    cell, hops = memory.frame.copy(), np.where(calling, 0, FAR)
+    cell[told] = msg[best[told], SX : SY + 1]
+    hops[told] = msg[best[told], SEEKER_HOPS] + 1
+    return cell, hops
+
+
+def _deeper(
+    sense: Perception,
+    memory: Memory,
+    occupied: np.ndarray,
+    seeker: np.ndarray,
+    seeker_hops: np.ndarray,
+) -> np.ndarray:
+    """Per robot, the way to an adjacent open cell deeper in the shape than its own, or 0.
+    Deeper, for a robot with a goal that hears of a robot calling open cells to it
+    (`_relay_seekers`): farther from that robot, so stepping there brings the open cell one
+    step nearer it, and open cells travel through a formed shape to robots it walls off from
+    them. A horseshoe's last two cells, open on its outer edge, waited for ever for the two
+    robots in its bay; at 10,000 robots the spare ones jammed on the far side of the letter
+    S's arm, 28 cells thick, from the open cells on its bay side. Otherwise deeper is by
+    depth (steps to the nearest cell outside the shape), so holes surface at the rim where
+    spare robots reach them, and robots that claim the rim of new rows never wall the inner
+    row in. Filling from the inside out, and open cells that travel, are our lattice
+    additions, not the paper's. Each step raises the summed depth of occupied cells or
+    brings an open cell nearer a calling robot, which stops calling once it has a goal."""
     depth = _depth(sense.blueprint)
-    mine = box_lookup(depth, sense.group, memory.frame)
+    drawn = memory.has_goal & (seeker_hops < FAR)
+
+    def value(cells: np.ndarray) -> np.ndarray:
+        inside = box_lookup(depth, sense.group, cells)
+        farther = np.abs(cells - seeker).sum(axis=1) + 1  # 0 stays for outside the shape
+        return np.where(inside > 0, np.where(drawn, farther, inside), 0)
+
+    best = value(memory.frame)
+    inside = best > 0
     held = np.zeros_like(occupied)
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
     relative = msg[:, GX : GY + 1] - memory.frame[me]
-    best, way = mine.copy(), np.zeros(len(sense), dtype=np.int64)
+    way = np.zeros(len(sense), dtype=np.int64)
     for direction in range(1, len(STEPS)):
         held[me[talk & (relative == STEPS[direction]).all(axis=1)], direction] = True
-        there = box_lookup(depth, sense.group, memory.frame + STEPS[direction])
+        there = value(memory.frame + STEPS[direction])
         better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
         best, way = np.where(better, there, best), np.where(better, direction, way)
-    return np.where(mine > 0, way, 0)
+    return np.where(inside, way, 0)
 
 
 @functools.lru_cache(maxsize=4)
@@ -736,18 +811,25 @@ def _give_up_to_the_silent(sense: Perception, memory: Memory, silent: np.ndarray
 
 
 def _roam(
-    memory: Memory, occupied: np.ndarray, roaming: np.ndarray, rng: np.random.Generator
+    sense: Perception,
+    memory: Memory,
+    occupied: np.ndarray,
+    roaming: np.ndarray,
+    rng: np.random.Generator,
 ) -> np.ndarray:
-    """Moves of robots that hear of no localised robot: straight on until blocked (a wall
-    shows as a move that failed), then a new random way. A straight walk crosses the arena in
-    its width; a random walk needs its area squared, which left small swarms in big arenas
-    searching for tens of thousands of steps."""
-    rows = np.flatnonzero(roaming)
+    """Moves of robots that hear of no localised robot: on the way the hop count last led them
+    (`_hops`), straight on until blocked (a wall shows as a move that failed), then a new
+    random way, and a new random way every `ROAM` cells or so. A straight walk crosses the
+    arena in its width; a random walk needs its area squared, which left small swarms in big
+    arenas searching for tens of thousands of steps. Without the turns a robot that met the
+    arena's wall went round along it for good. The way is chosen only at rest: a robot on
+    the move senses its neighbours from between two cells."""
+    rows = np.flatnonzero(roaming & sense.ready)
     way = memory.roam[rows]
-    turn = (way == 0) | occupied[rows, way] | (rng.random(len(rows)) < 0.02)
+    turn = (way == 0) | occupied[rows, way] | (rng.random(len(rows)) < 1 / ROAM)
     way[turn] = _random_free(occupied[rows[turn]], rng)
     memory.roam[rows] = way
-    return way
+    return memory.roam[roaming]
 
 
 def _random_free(occupied: np.ndarray, rng: np.random.Generator) -> np.ndarray:

@@ -11,8 +11,10 @@ those the shortest. Robots in the way are left to the local planner.
 from __future__ import annotations
 
 import functools
+from collections.abc import Iterator
 
 import numpy as np
+from scipy import ndimage
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -33,12 +35,7 @@ def waypoints(
     round the shape, or for a target the seeds wall in)."""
     found = np.zeros(len(frame), dtype=bool)
     out = target.copy()
-    for group in np.unique(groups):
-        rows = np.flatnonzero(groups == group)
-        low, size = _box(blueprint, int(group))
-        ends, which = np.unique(target[rows], axis=0, return_inverse=True)
-        fields = np.stack([_field(blueprint, int(group), x, y) for x, y in ends.tolist()])
-        which = which.reshape(-1)
+    for _, rows, low, size, fields, which in _grouped(blueprint, groups, target):
         at = frame[rows] - low
         for _ in range(ahead):
             here = _distance(fields, which, at, size)
@@ -52,6 +49,38 @@ def waypoints(
         found[rows] = reached
         out[rows[reached]] = at[reached] + low
     return out, found
+
+
+def ways(
+    blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, target: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each robot's way round the shape to its `target` from where it stands: how many free
+    cells it walks, and how many more shape cells it crosses than the fewest that any way in
+    from outside must (more: the shape walls the robot off from the target). inf: no way, or
+    the robot is off the margin."""
+    walked, walled = np.full(len(frame), np.inf), np.full(len(frame), np.inf)
+    for group, rows, low, size, fields, which in _grouped(blueprint, groups, target):
+        cost = _distance(fields, which, frame[rows] - low, size)
+        way = rows[np.isfinite(cost)]
+        cost = cost[np.isfinite(cost)]
+        crossed = np.floor(cost / size.prod())  # a shape cell costs more than any walk
+        walked[way] = cost - crossed * size.prod()
+        ends = target[way] - low
+        walled[way] = crossed - _fewest_crossed(blueprint, group)[ends[:, 0], ends[:, 1]]
+    return walked, walled
+
+
+def _grouped(
+    blueprint: Blueprint, groups: np.ndarray, target: np.ndarray
+) -> Iterator[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per group: the group, its robots' rows, its box's low corner and size, the route field
+    of each of their distinct targets, and which field is each robot's."""
+    for group in np.unique(groups).tolist():
+        rows = np.flatnonzero(groups == group)
+        low, size = _box(blueprint, group)
+        ends, which = np.unique(target[rows], axis=0, return_inverse=True)
+        fields = np.stack([_field(blueprint, group, x, y) for x, y in ends.tolist()])
+        yield group, rows, low, size, fields, which.reshape(-1)
 
 
 def _distance(
@@ -70,6 +99,18 @@ def _box(blueprint: Blueprint, group: int) -> tuple[np.ndarray, np.ndarray]:
     cells = np.concatenate([blueprint.cells[group], SEED_CELLS])
     low = cells.min(axis=0) - MARGIN
     return low, cells.max(axis=0) + MARGIN + 1 - low
+
+
+@functools.lru_cache(maxsize=16)
+def _fewest_crossed(blueprint: Blueprint, group: int) -> np.ndarray:
+    """Per cell of the box, the fewest shape cells a way in from outside crosses to reach it,
+    itself included (0 outside): its taxicab distance to the nearest cell neither shape nor
+    seed."""
+    low, size = _box(blueprint, group)
+    walls = np.zeros(size, dtype=bool)
+    for cells in (blueprint.cells[group], SEED_CELLS):
+        walls[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
+    return ndimage.distance_transform_cdt(walls, metric="taxicab")
 
 
 @functools.lru_cache(maxsize=16)
