@@ -299,7 +299,7 @@ def _goals_at_rest(sense: Perception, memory: Memory) -> np.ndarray:
     resting = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     resting &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1) & (theirs == msg[:, GX : GY + 1]).all(1)
     own = memory.localised & memory.has_goal & (memory.frame == memory.goal).all(axis=1)
-    return np.unique(
+    return np.sort(
         np.concatenate(
             [_key(me[resting], theirs[resting]), _key(np.flatnonzero(own), memory.goal[own])]
         )
@@ -307,9 +307,23 @@ def _goals_at_rest(sense: Perception, memory: Memory) -> np.ndarray:
 
 
 def _key(robot: np.ndarray, cell: np.ndarray) -> np.ndarray:
-    """One integer per robot and frame cell, for set lookups (`np.isin`)."""
+    """One integer per robot and frame cell, for set lookups (`_among`)."""
     span = np.int64(1 << 21)
     return (robot.astype(np.int64) * span + cell[:, 0] + span // 2) * span + cell[:, 1] + span // 2
+
+
+def _among(keys: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """Whether each of `keys` is in the sorted array `known`: a binary search of the keys in
+    sorted order. At 10,000 robots `np.isin`, with `np.unique` for the sets, took five times
+    as long (numpy 2.4's `unique` goes by a hash table, a hundred times slower than its sort
+    on these keys)."""
+    if len(known) == 0:
+        return np.zeros(len(keys), dtype=bool)
+    order = np.argsort(keys)
+    at = np.minimum(np.searchsorted(known, keys[order]), len(known) - 1)
+    found = np.empty(len(keys), dtype=bool)
+    found[order] = known[at] == keys[order]
+    return found
 
 
 def _held_twice(sense: Perception, rested: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -320,7 +334,7 @@ def _held_twice(sense: Perception, rested: np.ndarray) -> tuple[np.ndarray, np.n
     me, msg = sense.owner, sense.message
     goal = msg[:, GX : GY + 1]
     away = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1) & (msg[:, HAS] == 1)
-    away &= (msg[:, X : Y + 1] != goal).any(axis=1) & np.isin(_key(me, goal), rested)
+    away &= (msg[:, X : Y + 1] != goal).any(axis=1) & _among(_key(me, goal), rested)
     first = _best_per_robot(len(sense), me, np.zeros(len(me)), away)
     cell = np.zeros((len(sense), 2), dtype=np.int64)
     cell[first >= 0] = goal[first[first >= 0]]
@@ -762,9 +776,9 @@ def _choose_partner(
     score = np.where(gain > 0, 2 * gain + asked, np.where(still & (fair | push | pushed), 1, 0))
     same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
     again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
-    held = their_has & ~resting_there & np.isin(_key(me, their_cell), rested)
+    held = their_has & ~resting_there & _among(_key(me, their_cell), rested)
     settled = my_has & (mine == my_cell).all(axis=1)
-    held |= settled & their_has & np.isin(_key(me, their_cell), silent)
+    held |= settled & their_has & _among(_key(me, their_cell), silent)
     score = np.where(talk & ~same & ~again & ~held, score, 0)
     best = _best_per_robot(len(sense), me, -score, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
@@ -795,7 +809,7 @@ def _silent_cells(sense: Perception, memory: Memory) -> np.ndarray:
     me = sense.owner
     unheard = ~sense.heard & ~sense.seed
     cells = memory.frame[me[unheard]] + np.rint(sense.offset[unheard]).astype(np.int64)
-    return np.unique(_key(me[unheard], cells))
+    return np.sort(_key(me[unheard], cells))
 
 
 def _give_up_to_the_silent(sense: Perception, memory: Memory, silent: np.ndarray) -> None:
@@ -805,7 +819,7 @@ def _give_up_to_the_silent(sense: Perception, memory: Memory, silent: np.ndarray
     SILENCE``, and then its cell is merely open again to seekers. Only a step at rest, when
     offsets are whole cells, clears the count."""
     robots = np.arange(len(sense))
-    seen = memory.localised & memory.has_goal & np.isin(_key(robots, memory.goal), silent)
+    seen = memory.localised & memory.has_goal & _among(_key(robots, memory.goal), silent)
     memory.silence = np.where(seen, memory.silence + 1, np.where(sense.ready, 0, memory.silence))
     memory.has_goal &= memory.silence < SILENCE
 
