@@ -50,11 +50,14 @@ LOYALTY = 2
 in a horseshoe's bay, with open cells at the ends of both arms, heard of the other one every
 few steps, turned each time, and never reached either."""
 
-LOST_REACH = 64
-"""Hops to a localised robot past which a robot counts as hearing of none. Three robots that
-lost their bearings far from the others each heard the other two tell of a way back that ran
-through itself, and counted up to `FAR` one hop a step before they set out to search, for a
-thousand steps."""
+CLIMB = 8
+"""Hops a robot's count to a localised robot may rise within twice as many steps before it
+counts as hearing of none (see `_hops`). Robots that lost their bearings far from the others
+hear each other tell of a way back that runs through themselves, and count up a hop a step:
+three such robots counted to a thousand hops, for a thousand steps, before they set out.
+A fixed cap of 24 hops instead left robots at the edge of a 10,000-robot arena, 60 hops
+from the localised ones, searching at random; the count of a robot that drifts away from
+the others rises a hop in tens of steps."""
 
 ROAM = 20
 """Cells a robot that hears of no localised robot walks straight on average (see `_roam`)."""
@@ -131,6 +134,8 @@ class LocalSwap(Program):
         "routed": Slot(bool, False),
         "silence": Slot(np.int64, 0),
         "calling": Slot(bool, False),
+        "low_hops": Slot(np.int64, FAR),
+        "low_age": Slot(np.int64, 0),
     }
 
     def act(
@@ -562,8 +567,9 @@ def localise(sense: Perception, memory: Memory) -> None:
 
 
 def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
-    """Each robot's hops to a localised robot (a seed counts), and the direction of its
-    neighbour nearest one (0 if none is nearer than itself)."""
+    """Each robot's hops to a localised robot (a seed counts; FAR: none, or a count that rose
+    `CLIMB` hops within twice as many steps), and the direction of its neighbour nearest one
+    (0 if none is nearer than itself)."""
     heard_hops = np.where(
         sense.seed, 0, np.where(sense.kin & ~sense.seed, sense.message[:, HOPS], FAR)
     )
@@ -573,7 +579,12 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
     found = best >= 0
     nearest = np.full(len(sense), FAR, dtype=np.int64)
     nearest[found] = heard_hops[best[found]]
-    hops = np.where(memory.localised, 0, np.where(nearest < LOST_REACH, nearest + 1, FAR))
+    hops = np.where(memory.localised, 0, np.minimum(nearest + 1, FAR))
+    memory.low_age += 1
+    fresh = (hops <= memory.low_hops) | (memory.low_age > 2 * CLIMB)
+    memory.low_hops = np.where(fresh, hops, memory.low_hops)
+    memory.low_age[fresh] = 0
+    hops[hops - memory.low_hops >= CLIMB] = FAR  # counting up to infinity: no way back
     offset = np.zeros((len(sense), 2))
     offset[found] = sense.offset[best[found]]
     along_x = np.abs(offset[:, 0]) >= np.abs(offset[:, 1])
