@@ -215,7 +215,9 @@ class LocalControl:
     def perceive(self) -> Perception:
         """What every robot senses now. (1) `np.take` gathers rows many times faster than
         indexing ``array[rows]`` of a narrow 2-D array (numpy 2.4: 7 us against 190 us for
-        5,000 rows of two)."""
+        5,000 rows of two). (2) A program reads the messages a field at a time; laid out
+        row by row, every field read strides over all the others (local-swap at 10,000 robots:
+        240 to 255 ms a step, against 161 ms field by field)."""
         swarm = self.swarm
         n, senses = len(swarm.cell), self.program.senses
         seeds = swarm.world.seeds
@@ -240,7 +242,8 @@ class LocalControl:
         # gather every entry's row, seeds' and robots' alike, then blank the few unheard (1)
         unheard = np.flatnonzero(~heard)
         said = np.zeros((len(seeds), self.program.message_size), dtype=np.int64)
-        message = np.take(np.concatenate([self.broadcast, said]), other, axis=0)
+        # column by column, so each field of `message` lies contiguous (Fortran order) (2)
+        message = np.take(np.concatenate([self.broadcast, said]).T, other, axis=1).T
         message[unheard] = 0
         frames = np.concatenate([np.zeros((n, 2), dtype=np.int64), self.seed_frame])
         seed_frame = np.take(frames, other, axis=0)

@@ -91,6 +91,10 @@ straight back from the one that pushed it, by the distance rule."""
 REVERSE = np.array([0, 2, 1, 4, 3])
 """The opposite of each direction index."""
 
+DIRECTION_OF = np.zeros((3, 3), dtype=np.int64)
+DIRECTION_OF[STEPS[:, 0] + 1, STEPS[:, 1] + 1] = np.arange(len(STEPS))
+"""The direction index of each unit step ``(dx, dy)``, at ``[dx + 1, dy + 1]``."""
+
 BIG = 1 << 40
 """Farther than any cell."""
 
@@ -158,8 +162,8 @@ class LocalSwap(Program):
         target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
         blind = np.flatnonzero(seeking & (news_hops >= FAR) & ~by_shape)
         target[blind] = _nearest_cell(sense, memory, blind)
-        here = (target == memory.frame).all(axis=1)
-        resting = memory.has_goal & (memory.goal == memory.frame).all(axis=1)
+        here = _same(target, memory.frame)
+        resting = memory.has_goal & _same(memory.goal, memory.frame)
         memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
         seeker, seeker_hops = _relay_seekers(sense, memory, memory.calling)
         way = _deeper(sense, memory, occupied, seeker, seeker_hops)
@@ -171,13 +175,14 @@ class LocalSwap(Program):
         memory.goal[claim], memory.has_goal[claim] = memory.frame[claim], True
         target[memory.has_goal] = memory.goal[memory.has_goal]
         has_goal = memory.localised & memory.has_goal
-        memory.at_goal = has_goal & (memory.frame == memory.goal).all(axis=1)
-        going = (has_goal | seeking) & (memory.frame != target).any(axis=1)
-        same_aim = (target == memory.aim).all(axis=1)
+        memory.at_goal = has_goal & _same(memory.frame, memory.goal)
+        going = (has_goal | seeking) & ~_same(memory.frame, target)
+        same_aim = _same(target, memory.aim)
         _note_progress(memory, target)
         waypoint = _route(sense, memory, target, going & sense.ready, same_aim, self.senses.radius)
-        arrived = sense.moved.any(axis=1)
-        memory.came[arrived] = _direction(-sense.moved[arrived])
+        arrived = ~_same(sense.moved, STEPS[0])
+        back = -sense.moved[arrived]
+        memory.came[arrived] = DIRECTION_OF[back[:, 0] + 1, back[:, 1] + 1]
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
         delta = waypoint - memory.frame
@@ -235,9 +240,9 @@ def _note_progress(memory: Memory, target: np.ndarray) -> None:
     A robot with nowhere to go keeps its count and its target: a seeker in a letter S's bay
     lost sight of its open cell every few steps, for a step, and so never counted as stuck.
     One on its goal is not stuck, whatever it met on its way there."""
-    left = np.abs(target - memory.frame).sum(axis=1)
+    left = _apart(target, memory.frame)
     aiming = left > 0
-    new = aiming & (target != memory.aim).any(axis=1)
+    new = aiming & ~_same(target, memory.aim)
     nearer = aiming & (left < memory.closest) | memory.at_goal
     memory.stuck = np.where(nearer, 0, memory.stuck + aiming)
     memory.closest = np.where(new | nearer, left, memory.closest)
@@ -289,10 +294,10 @@ def _yield_taken(sense: Perception, memory: Memory) -> None:
     theirs = msg[:, X : Y + 1]
     there = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     there &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1)
-    there &= (theirs == msg[:, GX : GY + 1]).all(axis=1) & (theirs == memory.goal[me]).all(axis=1)
+    there &= _same(theirs, msg[:, GX : GY + 1]) & _same(theirs, memory.goal[me])
     told = sense.heard & sense.kin & ~sense.seed & (msg[:, TWICE] == 1)
-    told &= (msg[:, TX : TY + 1] == memory.goal[me]).all(axis=1) & (memory.since_trade[me] > 1)
-    drop = (there | told) & memory.has_goal[me] & (memory.frame[me] != memory.goal[me]).any(axis=1)
+    told &= _same(msg[:, TX : TY + 1], memory.goal[me]) & (memory.since_trade[me] > 1)
+    drop = (there | told) & memory.has_goal[me] & ~_same(memory.frame[me], memory.goal[me])
     memory.has_goal[me[drop]] = False
 
 
@@ -302,8 +307,8 @@ def _goals_at_rest(sense: Perception, memory: Memory) -> np.ndarray:
     me, msg = sense.owner, sense.message
     theirs = msg[:, X : Y + 1]
     resting = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
-    resting &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1) & (theirs == msg[:, GX : GY + 1]).all(1)
-    own = memory.localised & memory.has_goal & (memory.frame == memory.goal).all(axis=1)
+    resting &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1) & _same(theirs, msg[:, GX : GY + 1])
+    own = memory.localised & memory.has_goal & _same(memory.frame, memory.goal)
     return np.sort(
         np.concatenate(
             [_key(me[resting], theirs[resting]), _key(np.flatnonzero(own), memory.goal[own])]
@@ -315,6 +320,24 @@ def _key(robot: np.ndarray, cell: np.ndarray) -> np.ndarray:
     """One integer per robot and frame cell, for set lookups (`_among`)."""
     span = np.int64(1 << 21)
     return (robot.astype(np.int64) * span + cell[:, 0] + span // 2) * span + cell[:, 1] + span // 2
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row by row, whether cells ``(k, 2)`` are equal (either side may be one cell).
+    ``(a == b).all(axis=1)`` is ten times slower: numpy reduces two columns slowly."""
+    return (a[..., 0] == b[..., 0]) & (a[..., 1] == b[..., 1])
+
+
+def _apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row by row, the taxicab distance between cells ``(k, 2)`` (either side may be one)."""
+    return np.abs(a[..., 0] - b[..., 0]) + np.abs(a[..., 1] - b[..., 1])
+
+
+def _within(a: np.ndarray, reach: float, strict: bool = False) -> np.ndarray:
+    """Row by row, whether offsets ``(k, 2)`` lie within `reach` on both axes (below it if
+    `strict`)."""
+    inside = np.less if strict else np.less_equal
+    return inside(np.abs(a[:, 0]), reach) & inside(np.abs(a[:, 1]), reach)
 
 
 def _among(keys: np.ndarray, known: np.ndarray) -> np.ndarray:
@@ -339,7 +362,7 @@ def _held_twice(sense: Perception, rested: np.ndarray) -> tuple[np.ndarray, np.n
     me, msg = sense.owner, sense.message
     goal = msg[:, GX : GY + 1]
     away = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1) & (msg[:, HAS] == 1)
-    away &= (msg[:, X : Y + 1] != goal).any(axis=1) & _among(_key(me, goal), rested)
+    away &= ~_same(msg[:, X : Y + 1], goal) & _among(_key(me, goal), rested)
     first = _best_per_robot(len(sense), me, np.zeros(len(me)), away)
     cell = np.zeros((len(sense), 2), dtype=np.int64)
     cell[first >= 0] = goal[first[first >= 0]]
@@ -369,14 +392,14 @@ def _open_in_sight(
     index = _disc_index(radius)
     me, msg = sense.owner, sense.message
     holds = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
-    sat = np.rint(sense.offset).astype(np.int64)
+    sat = _cells(sense)
     for rows, relative in (
         (me, sat),
         (me[holds], msg[holds, GX : GY + 1] - memory.frame[me[holds]]),
         (np.flatnonzero(memory.has_goal), (memory.goal - memory.frame)[memory.has_goal]),
         (np.flatnonzero(recent), (memory.given - memory.frame)[recent]),
     ):
-        near = (np.abs(relative) <= reach).all(axis=1)
+        near = _within(relative, reach)
         slot = index[relative[near, 0] + reach, relative[near, 1] + reach]
         taken[rows[near][slot >= 0], slot[slot >= 0]] = True
     free = inside & ~taken & (memory.localised & sense.ready)[:, None]
@@ -423,7 +446,7 @@ def _relay_open(
     news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
     news &= memory.localised[me]
     news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
-    known = (msg[:, OX : OY + 1] == memory.heard[me]).all(axis=1)
+    known = _same(msg[:, OX : OY + 1], memory.heard[me])
     best = _best_per_robot(len(sense), me, msg[:, OPEN_HOPS] - LOYALTY * known, news)
     told = (best >= 0) & ~seen
     cell, hops = sight.copy(), np.where(seen, 0, FAR)
@@ -457,11 +480,11 @@ def _cut_off(
     put while spare ones fill the new rows. One that called only while stuck stopped each
     time the open cell came nearer, and the robots that did not hear it sent it back: in a
     ring's hole the open cell went up and down the ring's side for good."""
-    rows = np.flatnonzero(seeking & (memory.stuck > STUCK) & (target != memory.frame).any(axis=1))
+    rows = np.flatnonzero(seeking & (memory.stuck > STUCK) & ~_same(target, memory.frame))
     rows = rows[~sense.blueprint.contains(sense.group[rows], memory.frame[rows])]
     frame, group = memory.frame[rows], sense.group[rows]
     walked, walled = routes.ways(sense.blueprint, group, frame, target[rows])
-    straight = np.abs(target[rows] - frame).sum(axis=1)
+    straight = _apart(target[rows], frame)
     calling = np.zeros(len(sense), dtype=bool)
     calling[rows] = np.isfinite(walked) & ((walled > 0) | (walked > ROUNDABOUT * straight))
     return calling
@@ -509,7 +532,7 @@ def _deeper(
 
     def value(cells: np.ndarray) -> np.ndarray:
         inside = box_lookup(depth, sense.group, cells)
-        farther = np.abs(cells - seeker).sum(axis=1) + 1  # 0 stays for outside the shape
+        farther = _apart(cells, seeker) + 1  # 0 stays for outside the shape
         return np.where(inside > 0, np.where(drawn, farther, inside), 0)
 
     best = value(memory.frame)
@@ -520,7 +543,7 @@ def _deeper(
     relative = msg[:, GX : GY + 1] - memory.frame[me]
     way = np.zeros(len(sense), dtype=np.int64)
     for direction in range(1, len(STEPS)):
-        held[me[talk & (relative == STEPS[direction]).all(axis=1)], direction] = True
+        held[me[talk & _same(relative, STEPS[direction])], direction] = True
         there = value(memory.frame + STEPS[direction])
         better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
         best, way = np.where(better, there, best), np.where(better, direction, way)
@@ -553,8 +576,8 @@ def localise(sense: Perception, memory: Memory) -> None:
     takes its frame cell from its nearest seed or localised neighbour (that one's frame cell
     less the sensed offset), when the offset reads as whole cells."""
     memory.frame[memory.localised] += sense.moved[memory.localised]
-    cells = np.rint(sense.offset).astype(np.int64)
-    whole = (np.abs(sense.offset - cells) < 0.25).all(axis=1)
+    cells = _cells(sense)
+    whole = _within(sense.offset - cells, 0.25, strict=True)
     robot = sense.heard & sense.kin & ~sense.seed & (sense.message[:, LOCALISED] == 1)
     robot &= sense.message[:, STAYS] == 1
     reference = np.where(sense.seed[:, None], sense.seed_frame, sense.message[:, X : Y + 1])
@@ -595,24 +618,36 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
 
 def _best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
-    the first, in reach order), or -1."""
-    order = np.lexsort((key, owner))  # stable: equal keys stay in reach order
-    order = order[mask[order]]
+    the first, in reach order), or -1. Entries come by robot (`owner` never falls), so one
+    pass finds each robot's least key and its first entry with it; sorting every entry by
+    robot and key took twice as long."""
     best = np.full(n, -1, dtype=np.int64)
-    owners = owner[order]
-    firsts = order[np.r_[True, owners[1:] != owners[:-1]]] if len(order) else order
+    rows = np.flatnonzero(mask)
+    if not len(rows):
+        return best
+    who, value = owner[rows], key[rows]
+    starts = np.flatnonzero(np.r_[True, who[1:] != who[:-1]])
+    least = np.minimum.reduceat(value, starts)
+    first = rows[value == np.repeat(least, np.diff(np.r_[starts, len(rows)]))]
+    firsts = first[np.r_[True, owner[first][1:] != owner[first][:-1]]]
     best[owner[firsts]] = firsts
     return best
 
 
+@functools.lru_cache(maxsize=1)
+def _cells(sense: Perception) -> np.ndarray:
+    """Each neighbour's offset rounded to whole cells, worked out once a step (five of the
+    program's parts use it)."""
+    return np.rint(sense.offset).astype(np.int64)
+
+
 def _occupied(sense: Perception) -> np.ndarray:
-    """``(n, 5)``: whether something sits in the cell one step in each direction."""
-    cells = np.rint(sense.offset).astype(np.int64)
+    """``(n, 5)``: whether something sits in the cell one step in each direction (a
+    neighbour whose offset rounds to that step)."""
+    cells = _cells(sense)
     occupied = np.zeros((len(sense), len(STEPS)), dtype=bool)
-    for direction in range(1, len(STEPS)):
-        near = (np.abs(sense.offset - STEPS[direction]) < 0.75).all(axis=1)
-        hit = near & (cells == STEPS[direction]).all(axis=1)
-        occupied[sense.owner[hit], direction] = True
+    unit = np.flatnonzero(_apart(cells, STEPS[0]) == 1)
+    occupied[sense.owner[unit], DIRECTION_OF[cells[unit, 0] + 1, cells[unit, 1] + 1]] = True
     return occupied
 
 
@@ -620,7 +655,7 @@ def _note_walls(sense: Perception, memory: Memory, occupied: np.ndarray) -> None
     """A move asked for last step that did not happen met something a robot cannot sense (the
     arena's edge, or a cell another robot took first): treat that way as blocked now, so a
     detour turns back at a wall instead of pushing into it for ever."""
-    failed = np.flatnonzero(sense.ready & (memory.asked > 0) & (sense.moved == 0).all(axis=1))
+    failed = np.flatnonzero(sense.ready & (memory.asked > 0) & _same(sense.moved, STEPS[0]))
     occupied[failed, memory.asked[failed]] = True
 
 
@@ -644,8 +679,8 @@ def _plan(
     blocked = np.ones((len(sense), side, side), dtype=bool)
     disc = _disc(radius)
     blocked[:, disc[:, 0] + reach, disc[:, 1] + reach] = False
-    sat = np.rint(sense.offset).astype(np.int64)
-    near = (np.abs(sat) <= reach).all(axis=1)
+    sat = _cells(sense)
+    near = _within(sat, reach)
     blocked[sense.owner[near], sat[near, 0] + reach, sat[near, 1] + reach] = True
     for direction in range(1, len(STEPS)):
         (dx, dy) = STEPS[direction] + reach
@@ -672,16 +707,11 @@ def _plan(
     score = np.where(steps >= 0, left * (side * side) + steps, BIG).reshape(len(rows), side * side)
     best = score.argmin(axis=1)
     chosen = np.zeros(len(sense), dtype=np.int64)
-    better = score[np.arange(len(rows)), best] // (side * side) < np.abs(delta[rows]).sum(axis=1)
+    better = score[np.arange(len(rows)), best] // (side * side) < _apart(delta[rows], STEPS[0])
     chosen[rows] = np.where(
         better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0
     )
     return chosen, np.where(going, first, 0)
-
-
-def _direction(steps: np.ndarray) -> np.ndarray:
-    """The direction index of each unit step ``(k, 2)``."""
-    return (steps[:, None, :] == STEPS[None, 1:, :]).all(axis=2).argmax(axis=1) + 1
 
 
 def _shifted(grid: np.ndarray, dx: int, dy: int) -> np.ndarray:
@@ -757,40 +787,43 @@ def _choose_partner(
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me]
+    rows = np.flatnonzero(talk)  # in reach order, so `_best_per_robot` breaks ties as before
+    me, msg = me[rows], np.take(msg.T, rows, axis=1).T  # field by field, as perceived
     still = msg[:, STAYS] == 1
     my_has, their_has = memory.has_goal[me], msg[:, HAS] == 1
     my_cell, their_cell = memory.goal[me], msg[:, GX : GY + 1]
     mine, theirs = memory.frame[me], msg[:, X : Y + 1]
 
     def apart(where: np.ndarray, goal_at: np.ndarray, has: np.ndarray) -> np.ndarray:
-        return np.where(has, np.abs(where - goal_at).sum(axis=1), 0)
+        return np.where(has, _apart(where, goal_at), 0)
 
     now = apart(mine, my_cell, my_has) + apart(theirs, their_cell, their_has)
     traded = apart(mine, their_cell, their_has) + apart(theirs, my_cell, my_has)
     gain = now - traded
     asked = msg[:, WANTS] == sense.number[me]
     toward = target[me] - mine
-    blocked = (my_has | seeking[me]) & (preferred[me] == 0) & (np.abs(toward).sum(axis=1) > 0)
-    resting_there = (theirs == their_cell).all(axis=1) & their_has
-    in_the_way = blocked & (np.abs(theirs - mine).sum(axis=1) == 1)
-    in_the_way &= (np.sign(theirs - mine) * np.sign(toward) > 0).any(axis=1)
+    blocked = (my_has | seeking[me]) & (preferred[me] == 0) & (_apart(toward, STEPS[0]) > 0)
+    resting_there = _same(theirs, their_cell) & their_has
+    in_the_way = blocked & (_apart(theirs, mine) == 1)
+    along = np.sign(theirs - mine) * np.sign(toward)
+    in_the_way &= (along[:, 0] > 0) | (along[:, 1] > 0)
     their_news = msg[:, OPEN_HOPS]
     push = in_the_way & resting_there & ~my_has & (their_news <= PUSH_HOPS)
-    pushed_on = memory.gave & (memory.since_trade < TABU) & (memory.given == memory.frame).all(1)
+    pushed_on = memory.gave & (memory.since_trade < TABU) & _same(memory.given, memory.frame)
     pushed_on = pushed_on[me]  # out of the cell it stands on: the push goes on down the chain
     push &= (memory.stuck > STUCK)[me] | pushed_on
-    pushed = asked & my_has & ~their_has & (mine == my_cell).all(axis=1)
+    pushed = asked & my_has & ~their_has & _same(mine, my_cell)
     open_at = news[me]
-    nearer = np.abs(mine - open_at).sum(axis=1) < np.abs(theirs - open_at).sum(axis=1)
+    nearer = _apart(mine, open_at) < _apart(theirs, open_at)
     pushed &= (news_hops[me] <= PUSH_HOPS) & nearer
     fair = (gain == 0) & (asked | in_the_way)
     score = np.where(gain > 0, 2 * gain + asked, np.where(still & (fair | push | pushed), 1, 0))
-    same = (my_has == their_has) & (~my_has | (my_cell == their_cell).all(axis=1))
+    same = (my_has == their_has) & (~my_has | _same(my_cell, their_cell))
     again = (msg[:, NUMBER] == memory.partner[me]) & (memory.since_trade[me] < TABU)
     held = their_has & ~resting_there & _among(_key(me, their_cell), rested)
-    settled = my_has & (mine == my_cell).all(axis=1)
+    settled = my_has & _same(mine, my_cell)
     held |= settled & their_has & _among(_key(me, their_cell), silent)
-    score = np.where(talk & ~same & ~again & ~held, score, 0)
+    score = np.where(~same & ~again & ~held, score, 0)
     best = _best_per_robot(len(sense), me, -score, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
     wants[best >= 0] = msg[best[best >= 0], NUMBER]
@@ -819,7 +852,7 @@ def _silent_cells(sense: Perception, memory: Memory) -> np.ndarray:
     now and then when messages are lost."""
     me = sense.owner
     unheard = ~sense.heard & ~sense.seed
-    cells = memory.frame[me[unheard]] + np.rint(sense.offset[unheard]).astype(np.int64)
+    cells = memory.frame[me[unheard]] + _cells(sense)[unheard]
     return np.sort(_key(me[unheard], cells))
 
 
