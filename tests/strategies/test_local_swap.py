@@ -3,7 +3,14 @@ cells that lost messages left open."""
 
 from __future__ import annotations
 
+import numpy as np
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
+
+from swarmshape.core.local import Memory
+from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.runs import build, configure, run
+from swarmshape.strategies import local_swap
 from tests.conftest import SHAPES
 
 
@@ -16,3 +23,66 @@ def test_goal_less_robots_find_their_way_round_to_open_cells_with_messages_lost(
     swarm = run(build(config), max_steps=3000)
     assert swarm.complete
     assert swarm.overlap_total == 0
+
+
+@settings(max_examples=200, deadline=None)
+@example(  # the five robots east of the S (seed 5, cells 45) at step 4,000
+    (
+        [(52, 20), (52, 21), (53, 22), (51, 21), (51, 22)],
+        [(29, 44), (18, 22), (4, 21), (29, 22), (28, 21)],
+        [4, 2, 3, 4, 1],
+    )
+)
+@given(
+    st.integers(2, 6).flatmap(
+        lambda n: st.tuples(
+            st.lists(
+                st.tuples(st.integers(0, 2), st.integers(0, 2)), min_size=n, max_size=n, unique=True
+            ),
+            st.lists(
+                st.tuples(st.integers(-8, 8), st.integers(-8, 8)),
+                min_size=n,
+                max_size=n,
+                unique=True,
+            ),
+            st.lists(st.integers(-1, n - 1), min_size=n, max_size=n),
+        )
+    )
+)
+def test_robots_at_rest_that_want_trades_always_agree_one(robots):
+    """A handful of robots at rest, all in touch: if any two would shorten their summed way by
+    trading goals, some two ask each other, whatever they asked for last step. Five robots
+    twenty cells from a 1,018-robot S, each preferring the one that had asked for it, passed
+    the asks round a ring for 17,000 steps without one trade."""
+    cells, goals, asked_before = (np.array(part) for part in robots)
+    n = len(cells)
+    program = local_swap.LocalSwap()
+    memory = Memory(program.memory, n)
+    memory.localised[:], memory.has_goal[:], memory.started[:] = True, True, True
+    memory.frame[:], memory.goal[:] = cells, goals
+    memory.since_trade[:] = local_swap.TABU
+    owner, other = (part.ravel() for part in np.nonzero(~np.eye(n, dtype=bool)))
+    message = np.zeros((len(owner), program.message_size), dtype=np.int64)
+    message[:, local_swap.LOCALISED] = message[:, local_swap.HAS] = message[:, local_swap.STAYS] = 1
+    message[:, [local_swap.X, local_swap.Y]] = cells[other]
+    message[:, [local_swap.GX, local_swap.GY]] = goals[other]
+    message[:, local_swap.NUMBER] = other
+    message[:, local_swap.WANTS] = asked_before[other]
+    yes = np.ones(len(owner), dtype=bool)
+    sense = Perception(
+        number=np.arange(n), group=np.zeros(n, dtype=np.int64), ready=np.ones(n, dtype=bool),
+        moved=np.zeros((n, 2), dtype=np.int64), start=np.arange(0, n * (n - 1) + 1, n - 1),
+        owner=owner, offset=(cells[other] - cells[owner]).astype(float), seed=~yes, kin=yes,
+        heard=yes, message=message, seed_frame=np.zeros((len(owner), 2), dtype=np.int64),
+        blueprint=Blueprint.of([goals]), step=1,
+    )  # fmt: skip
+    nobody = np.zeros(0, dtype=np.int64)
+    wants = local_swap._choose_partner(
+        sense, memory, np.zeros(n, dtype=np.int64), goals, np.zeros(n, dtype=bool),
+        goals, np.full(n, local_swap.FAR), nobody, nobody,
+    )  # fmt: skip
+    apart = np.abs(cells[:, None] - goals[None]).sum(axis=2)  # robot by goal
+    gain = apart.diagonal()[:, None] + apart.diagonal()[None] - apart - apart.T
+    if (gain > 0).any():
+        asking = np.flatnonzero(wants >= 0)
+        assert (wants[wants[asking]] == asking).any(), wants
