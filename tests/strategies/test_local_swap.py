@@ -86,3 +86,13 @@ def test_robots_at_rest_that_want_trades_always_agree_one(robots):
     if (gain > 0).any():
         asking = np.flatnonzero(wants >= 0)
         assert (wants[wants[asking]] == asking).any(), wants
+
+
+def test_a_seeker_between_two_arms_keeps_to_the_open_cell_it_heard_of():
+    """The 1,018-robot S, seed 2, stopped one cell short from step 2,000 on: its last robot
+    without a goal, in the bay between two arms and out of sight of both, heard of the open
+    cell only near one arm, and walked back to that arm each time the news faded."""
+    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=45, seed=2)
+    swarm = run(build(config), max_steps=4000)
+    assert swarm.complete
+    assert swarm.overlap_total == 0

@@ -161,7 +161,7 @@ class LocalSwap(Program):
         news, news_hops = _relay_open(sense, memory, self.senses.radius, sight, open_cell)
         target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
         blind = np.flatnonzero(seeking & (news_hops >= FAR) & ~by_shape)
-        target[blind] = _nearest_cell(sense, memory, blind)
+        target[blind] = _blind_target(sense, memory, blind, self.senses.radius)
         here = _same(target, memory.frame)
         resting = memory.has_goal & _same(memory.goal, memory.frame)
         memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
@@ -457,6 +457,19 @@ def _relay_open(
     cell[recall], hops[recall] = memory.heard[recall], memory.heard_hops[recall] + 1
     memory.heard, memory.heard_hops = cell.copy(), hops.copy()
     return cell, hops
+
+
+def _blind_target(sense: Perception, memory: Memory, rows: np.ndarray, radius: float) -> np.ndarray:
+    """Where robots without a goal that know of no open cell and see none of the shape head:
+    on to the shape cell they were heading for while it is out of sight, or else the nearest
+    one. A seeker in a letter S's bay, out of sight of both arms, heard of an open cell in one
+    arm only while near the other, and walked to and fro between the two for good."""
+    target = _nearest_cell(sense, memory, rows)
+    aim = memory.aim[rows]
+    onward = sense.blueprint.contains(sense.group[rows], aim)
+    onward &= np.hypot(*(aim - memory.frame[rows]).T) > radius
+    target[onward] = aim[onward]
+    return target
 
 
 def _nearest_cell(sense: Perception, memory: Memory, rows: np.ndarray) -> np.ndarray:
