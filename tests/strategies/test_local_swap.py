@@ -96,3 +96,13 @@ def test_a_seeker_between_two_arms_keeps_to_the_open_cell_it_heard_of():
     swarm = run(build(config), max_steps=4000)
     assert swarm.complete
     assert swarm.overlap_total == 0
+
+
+def test_robots_passing_each_other_on_their_way_round_do_not_circle_for_ever():
+    """The 442-robot S, seed 0, stopped two cells short from step 1,250 on: two robots
+    between the arena's top edge and the S, going round it opposite ways, stepped round each
+    other in one loop of four cells, each always the same way as the other."""
+    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=30, seed=0)
+    swarm = run(build(config), max_steps=4000)
+    assert swarm.complete
+    assert swarm.overlap_total == 0

@@ -83,6 +83,12 @@ robots on cells that a reshape keeps stay where they are unless nobody can get p
 robot pushed out of its cell pushes on at once: waiting, it was pushed back when `TABU` ran
 out, and the two did that for ever at a star's notch."""
 
+LAPS = 5
+"""Times `STUCK` a robot on its way round the shape (`routes`) may make no headway before it
+too takes random steps now and then: two robots passing each other the opposite ways round,
+between the shape's margin and the arena's edge, stepped round each other in the same loop of
+four cells for 17,000 steps, each time the same way as the other."""
+
 TABU = 10
 """Steps two robots that traded do not trade with each other again: a robot pushed out of
 its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
@@ -191,7 +197,8 @@ class LocalSwap(Program):
             sense, memory, preferred, target, seeking, news, news_hops, rested, silent
         )
         moves = _go_round(memory, delta, preferred, first, occupied, going & sense.ready, rng)
-        astray = going & sense.ready & (memory.stuck > STUCK) & ~memory.routed
+        lapped = memory.stuck > LAPS * STUCK  # round a loop on its route too
+        astray = going & sense.ready & (memory.stuck > STUCK) & (~memory.routed | lapped)
         astray &= rng.random(len(sense)) < 0.25
         moves[astray] = _random_free(occupied[astray], rng)
         moves[memory.wants >= 0] = 0  # hold still while a trade is agreed
