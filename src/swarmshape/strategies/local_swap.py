@@ -41,9 +41,15 @@ FAR = 1000
 """HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
 of no open cell."""
 
-OPEN_REACH = 24
+OPEN_REACH = 64
 """Hops an open cell is relayed. A filled cell's news dies out by counting up to this (each
-robot takes its neighbours' fewest hops plus one), so it bounds how long a stale one lasts."""
+robot takes its neighbours' fewest hops plus one), so it bounds how long a stale one lasts.
+At 24 hops, about 70 cells, the last open cells of a 10,000-robot letter S went unheard by
+twenty robots without a goal waiting 150 cells away on its other side."""
+
+CALL_REACH = 24
+"""Hops a robot's call for open cells is relayed (see `_relay_seekers`): open cells travel
+through a formed shape a cell in about ten steps, so only nearby ones are worth calling."""
 
 LOYALTY = 2
 """Hops of news a robot gives up to keep to the open cell it heard of last step. Two seekers
@@ -516,9 +522,9 @@ def _relay_seekers(
     """A robot that calls open cells to it (`calling`, see `_cut_off`) that each robot knows
     of, and hops to it (0: itself, FAR: none): its own cell, or the one its neighbours tell of
     with fewest hops. One that gets a goal stops calling, and the news of it dies out by
-    counting up to `OPEN_REACH`."""
+    counting up to `CALL_REACH`."""
     me, msg = sense.owner, sense.message
-    news = sense.heard & sense.kin & ~sense.seed & (msg[:, SEEKER_HOPS] < OPEN_REACH)
+    news = sense.heard & sense.kin & ~sense.seed & (msg[:, SEEKER_HOPS] < CALL_REACH)
     news &= memory.localised[me]
     best = _best_per_robot(len(sense), me, msg[:, SEEKER_HOPS], news)
     told = (best >= 0) & ~calling
