@@ -89,6 +89,12 @@ robots on cells that a reshape keeps stay where they are unless nobody can get p
 robot pushed out of its cell pushes on at once: waiting, it was pushed back when `TABU` ran
 out, and the two did that for ever at a star's notch."""
 
+SEARCH_AFTER = 100
+"""Steps a robot without a goal beside the shape, knowing of no open cell, waits for news
+before it walks to random cells of the shape to look for one (see `_search_target`). Sent at
+once, seekers that news would soon have reached walked away from it: the 1,018-robot S took
+29 % more steps."""
+
 LAPS = 5
 """Times `STUCK` a robot on its way round the shape (`routes`) may make no headway before it
 too takes random steps now and then: two robots passing each other the opposite ways round,
@@ -136,6 +142,7 @@ class LocalSwap(Program):
         "detour": Slot(np.int64, 0),
         "at_goal": Slot(bool, False),
         "asked": Slot(np.int64, 0),
+        "unaware": Slot(np.int64, 0),
         "roam": Slot(np.int64, 0),
         "came": Slot(np.int64, 0),
         "partner": Slot(np.int64, -1),
@@ -172,8 +179,13 @@ class LocalSwap(Program):
         sight, open_cell, by_shape = _open_in_sight(sense, memory, self.senses.radius)
         news, news_hops = _relay_open(sense, memory, self.senses.radius, sight, open_cell)
         target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
-        blind = np.flatnonzero(seeking & (news_hops >= FAR) & ~by_shape)
-        target[blind] = _blind_target(sense, memory, blind, self.senses.radius)
+        unaware = seeking & (news_hops >= FAR) & ~open_cell
+        memory.unaware = np.where(unaware, memory.unaware + 1, 0)
+        searching = by_shape & sense.ready & (memory.unaware > SEARCH_AFTER)
+        unaware = np.flatnonzero(unaware & (~by_shape | searching))
+        target[unaware] = _search_target(
+            sense, memory, unaware, searching[unaware], self.senses.radius, rng
+        )
         here = _same(target, memory.frame)
         resting = memory.has_goal & _same(memory.goal, memory.frame)
         memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
@@ -472,14 +484,30 @@ def _relay_open(
     return cell, hops
 
 
-def _blind_target(sense: Perception, memory: Memory, rows: np.ndarray, radius: float) -> np.ndarray:
-    """Where robots without a goal that know of no open cell and see none of the shape head:
-    on to the shape cell they were heading for while it is out of sight, or else the nearest
-    one. A seeker in a letter S's bay, out of sight of both arms, heard of an open cell in one
-    arm only while near the other, and walked to and fro between the two for good."""
+def _search_target(
+    sense: Perception,
+    memory: Memory,
+    rows: np.ndarray,
+    searching: np.ndarray,
+    radius: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Where robots without a goal that know of no open cell head: on to the shape cell they
+    were heading for while it is out of sight, or else the shape's nearest cell, or for those
+    `searching` (beside it, `SEARCH_AFTER` steps without news) a random cell of it. A seeker
+    in a letter S's bay, out of sight of both arms, heard of an open cell in one arm only
+    while near the other, and walked to and fro between the two for good; one beside the
+    10,000-robot S, beyond the reach of any news, stood still for good while the last open
+    cell waited."""
     target = _nearest_cell(sense, memory, rows)
+    groups = sense.group[rows]
+    counts = sense.blueprint.count(groups)
+    seen = np.flatnonzero(searching & (counts > 0))
+    if len(seen):
+        pick = rng.integers(0, counts[seen])
+        target[seen] = sense.blueprint.cell(groups[seen], pick)
     aim = memory.aim[rows]
-    onward = sense.blueprint.contains(sense.group[rows], aim)
+    onward = sense.blueprint.contains(groups, aim)
     onward &= np.hypot(*(aim - memory.frame[rows]).T) > radius
     target[onward] = aim[onward]
     return target
