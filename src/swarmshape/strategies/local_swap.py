@@ -839,14 +839,14 @@ def _choose_partner(
     hear (`_silent_cells`): a robot that held a goal under a stalled robot traded it into the
     formed shape, whose robot then left its cell for it.
 
-    Of trades that shorten the way equally a robot takes the lowest-numbered neighbour, the
-    same order on both ends of every pair, so the best pair among robots still for each other
-    always trades. Preferring the neighbour that had asked for it left five robots twenty
-    cells from a 1,018-robot S passing the asks round a ring, each wanting one that wanted
-    another, for 17,000 steps. A trade that shortens nothing takes two steps (one asks, the
-    other answers), so of those a robot takes the nearest: by number, a robot in a 10,000-robot
-    S asked a neighbour three cells off each step that one had asked it, and answered it each
-    step it had not, for 3,000 steps."""
+    Of equal scores a robot takes the lowest-numbered neighbour, the same order on both ends of
+    every pair, so the best pair among robots still for each other always trades. Preferring
+    the neighbour that had asked for it left five robots twenty cells from a 1,018-robot S
+    passing the asks round a ring, each wanting one that wanted another, for 17,000 steps. A
+    trade that shortens nothing takes two steps (one asks, the other answers), and by number
+    two robots of a 10,000-robot S asked each other in turn, never in the same step, for 3,000
+    steps; the nearest first instead (reach order) lets robots on cells a reshape keeps trade
+    away from them."""
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me]
@@ -887,7 +887,7 @@ def _choose_partner(
     settled = my_has & _same(mine, my_cell)
     held |= settled & their_has & _among(_key(me, their_cell), silent)
     score = np.where(~same & ~again & ~held, score, 0)
-    number = np.where(score > 1, msg[:, NUMBER], 0)
+    number = msg[:, NUMBER]
     best = _best_per_robot(len(sense), me, -score * (number.max(initial=0) + 1) + number, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
     wants[best >= 0] = msg[best[best >= 0], NUMBER]
