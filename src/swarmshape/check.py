@@ -42,6 +42,7 @@ class InvariantWatch(Observer):
         self._settled: np.ndarray | None = None
         self._formed = False
         self._faults = 0
+        self._dead: np.ndarray | None = None
 
     def capture(self, swarm: Swarm) -> None:
         step = swarm.step_count
@@ -68,8 +69,10 @@ class InvariantWatch(Observer):
                 f"step {step}: {len(pos)} robots where there were {swarm.world.agents} "
                 f"and faults removed {removed}"
             )
-        if len(swarm.faults.log) != self._faults:  # a fault may open cells of a formed shape
-            self._faults, self._formed = len(swarm.faults.log), False
+        if len(swarm.faults.log) != self._faults or not np.array_equal(swarm.dead, self._dead):
+            # a fault may open cells of a formed shape, and so may stalled robots coasting on
+            # after it and no longer walling off a cell they did a step before
+            self._faults, self._dead, self._formed = len(swarm.faults.log), swarm.dead.copy(), False
         if self._settled is not None:
             still = self._settled & (swarm.state == SETTLED)
             moved = np.flatnonzero(still & (swarm.cell != self._cells).any(axis=1))

@@ -105,6 +105,15 @@ STALLED_ON_A_GOAL = [
             (0, "remove", 0.5900099683931079, None)],
     rate=0.0,
 )  # fmt: skip
+# hypothesis found it: the shape formed the step 4 robots stalled, and one coasting on the step
+# after stopped walling off a cell, which opened it again
+@example(
+    bits=[bit == "#" for bit in "#.##.#....#.#.####.."],
+    spare=-1,
+    seed=150,
+    events=[(0, "remove", 0.05, None), (157, "stall", 4, (6, 0, 5, 5))],
+    rate=0.0,
+)
 def test_invariants_hold_through_random_faults(strategy, bits, spare, seed, events, rate):
     """Random fault events and failure rates: no overlaps, robots conserved except those
     removed, settled robots stay, the same run per seed, and the shape heals or rescales.
