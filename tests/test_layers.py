@@ -1,5 +1,6 @@
-"""The layers import downward only: the core is numpy and scipy, and nothing below the window
-loads pygame. Read from the source, so a stray import fails here before anyone notices."""
+"""The layers import downward only: the core is numpy, scipy and numba (its compiled kernels),
+and nothing below the window loads pygame. Read from the source, so a stray import fails here
+before anyone notices."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ PACKAGE = Path(swarmshape.__file__).parent
 STDLIB = sys.stdlib_module_names
 
 ALLOWED = {
-    "core": {"numpy", "scipy", "swarmshape.core", "swarmshape.errors"},
+    "core": {"numpy", "numba", "scipy", "swarmshape.core", "swarmshape.errors"},
     "strategies": {"numpy", "scipy", "swarmshape.core", "swarmshape.errors",
                    "swarmshape.strategies"},
     "io": {"numpy", "PIL", "swarmshape.core", "swarmshape.errors", "swarmshape.io"},

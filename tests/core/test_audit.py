@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmshape.core.audit import overlaps
+from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.lattice import FREE
+from swarmshape.core.motion import TOUCH, positions
 from tests.conftest import grid_from, make_swarm
 
 SHAPE = grid_from("""
@@ -42,3 +43,31 @@ def test_a_clean_run_has_no_overlaps_at_any_step():
         swarm.step()
         assert len(audit(swarm)[0]) == 0
     assert swarm.overlap_total == 0
+
+
+def test_every_overlapping_pair_is_found_among_squares_thrown_at_random():
+    """Squares thrown about at random (between cells too, onto seeds, some absent): the audit
+    names exactly the pairs whose centres are closer than a side on both axes, the test any
+    pair of unit squares must pass, checked here against every pair."""
+    rng = np.random.default_rng(0)
+    size, seeds = (7, 6), np.array([[0, 0], [1, 0], [0, 1]])
+    scratch = new_scratch(size)
+    found = 0
+    for _ in range(200):
+        n = int(rng.integers(2, 14))
+        cell = rng.integers(0, np.array(size) - 1, (n, 2))
+        direction = rng.integers(0, 5, n)
+        offset = np.where(direction > 0, rng.choice([0.0, 0.25, 0.5, 1 - 1e-12], n), 0.0)
+        present = rng.random(n) < 0.9
+        i, j = overlaps(cell, direction, offset, seeds, size, present, scratch)
+        centres = np.concatenate([positions(cell, direction, offset), seeds + 0.5])
+        there = np.concatenate([present, np.ones(len(seeds), dtype=bool)])
+        close = np.abs(centres[:, None] - centres[None]).max(axis=2) < TOUCH
+        close &= there[:, None] & there[None] & ~np.eye(len(there), dtype=bool)
+        expected = {(int(a), int(b)) for a, b in zip(*np.nonzero(np.triu(close)), strict=True)}
+        assert {
+            (min(a, b), max(a, b)) for a, b in zip(i.tolist(), j.tolist(), strict=True)
+        } == expected
+        assert (scratch == -1).all()
+        found += len(expected)
+    assert found > 50

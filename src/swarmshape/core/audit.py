@@ -7,8 +7,9 @@ one cell shows up as a counted overlap, not as a silent picture glitch.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-from swarmshape.core.motion import STEPS, TOUCH, positions
+from swarmshape.core.motion import STEPS, TOUCH
 
 DENSE_LIMIT = 40
 """Squares up to which `overlapping_pairs` compares every pair instead of hashing."""
@@ -20,60 +21,83 @@ def overlaps(
     offset: np.ndarray,
     seeds: np.ndarray,
     size: tuple[int, int],
+    present: np.ndarray | None = None,
+    scratch: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Index pairs ``(i, j)`` of overlapping squares among the robots and then the seeds
-    (seed ``s`` is number ``len(cell) + s``).
+    """Index pairs ``(i, j)`` of overlapping squares among the robots (those `present`, all by
+    default) and then the seeds (seed ``s`` is number ``len(cell) + s``).
 
     A square covers its cell, and the next one too while it is between the two; squares that
     overlap share a cell, so only squares sharing one need the exact test. Two squares may
     share a cell without overlapping (one leaving it as the other comes in behind it), but
-    never three, so every pair in a shared cell is tested.
+    never three, so every pair in a shared cell is tested (a pair sharing two cells counts
+    twice). `scratch` is a per-cell array of -1 the caller keeps (`new_scratch`), so a step
+    costs the squares and not the arena; it is left as it was found.
     """
-    between = np.flatnonzero(offset > 0)
-    covered = np.concatenate([cell, cell[between] + STEPS[direction[between]], seeds])
-    owners = np.concatenate([np.arange(len(cell)), between, len(cell) + np.arange(len(seeds))])
-    keys = (covered[:, 0] + 1) * (size[1] + 2) + covered[:, 1] + 1
-    shared = np.bincount(keys, minlength=(size[0] + 2) * (size[1] + 2))[keys] > 1
-    if not shared.any():
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    i, j = _pairs_in_cells(keys[shared], owners[shared])
-    at_i, at_j = (_centres(k, cell, direction, offset, seeds) for k in (i, j))
-    touching_or_apart = np.abs(at_i - at_j).max(axis=1) >= TOUCH
-    return i[~touching_or_apart], j[~touching_or_apart]
+    if present is None:
+        present = np.ones(len(cell), dtype=bool)
+    if scratch is None:
+        scratch = new_scratch(size)
+    pairs = _shared_cell_pairs(cell, direction, offset, present, seeds, size[1] + 2, scratch)
+    return pairs[:, 0], pairs[:, 1]
 
 
-def _centres(
-    which: np.ndarray,
-    cell: np.ndarray,
-    direction: np.ndarray,
-    offset: np.ndarray,
-    seeds: np.ndarray,
-) -> np.ndarray:
-    """Square centres of robots and seeds by number (seed ``s`` is ``len(cell) + s``), for
-    the few that share a cell rather than for all."""
-    robot = np.minimum(which, len(cell) - 1)
-    at = positions(cell[robot], direction[robot], offset[robot])
-    is_seed = which >= len(cell)
-    at[is_seed] = seeds[which[is_seed] - len(cell)] + 0.5
-    return at
+def new_scratch(size: tuple[int, int]) -> np.ndarray:
+    """The per-cell array `overlaps` works in, for an arena of `size` (with its ring of walls)."""
+    return np.full((size[0] + 2) * (size[1] + 2), -1, dtype=np.int64)
 
 
-def _pairs_in_cells(keys: np.ndarray, owners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every pair of distinct owners that share a key (a cell)."""
-    order = np.argsort(keys, kind="stable")
-    keys, owners = keys[order], owners[order]
-    found_i, found_j = [], []
-    gap = 1
-    while gap < len(keys):  # pairs a gap apart within each run of one key
-        first = np.flatnonzero(keys[gap:] == keys[:-gap])
-        if len(first) == 0:
-            break
-        found_i.append(owners[first])
-        found_j.append(owners[first + gap])
-        gap += 1
-    i, j = np.concatenate(found_i), np.concatenate(found_j)
-    distinct = i != j
-    return i[distinct], j[distinct]
+@njit(cache=True)
+def _shared_cell_pairs(cell, direction, offset, present, seeds, stride, first):  # pragma: no cover
+    """Pairs ``(k, 2)`` of overlapping squares: every square goes into the list of each cell it
+    covers (`first` holds a list's latest entry per cell, -1 for none) and is tested against
+    the squares already there. Squares in order: robots, then seeds."""
+    n, m = len(cell), len(seeds)
+    dxs, dys = STEPS[:, 0], STEPS[:, 1]
+    key = np.empty(2 * n + m, dtype=np.int64)
+    owner = np.empty(2 * n + m, dtype=np.int64)
+    after = np.empty(2 * n + m, dtype=np.int64)
+    centre = np.empty((n + m, 2))
+    found = []
+    entries = 0
+    for square in range(n + m):
+        if square < n:
+            if not present[square]:
+                continue
+            x, y, dx, dy = (
+                cell[square, 0],
+                cell[square, 1],
+                dxs[direction[square]],
+                dys[direction[square]],
+            )
+            centre[square, 0] = x + 0.5 + offset[square] * dx
+            centre[square, 1] = y + 0.5 + offset[square] * dy
+            covers = 2 if offset[square] > 0 else 1
+        else:
+            x, y, dx, dy, covers = seeds[square - n, 0], seeds[square - n, 1], 0, 0, 1
+            centre[square, 0], centre[square, 1] = x + 0.5, y + 0.5
+        home = (x + 1) * stride + y + 1
+        for part in range(covers):
+            here = home + part * (dx * stride + dy)
+            other = first[here]
+            while other >= 0:
+                o = owner[other]
+                if o != square:
+                    apart = max(
+                        abs(centre[o, 0] - centre[square, 0]), abs(centre[o, 1] - centre[square, 1])
+                    )
+                    if apart < TOUCH:
+                        found.append((o, square))
+                other = after[other]
+            key[entries], owner[entries], after[entries] = here, square, first[here]
+            first[here] = entries
+            entries += 1
+    for entry in range(entries):
+        first[key[entry]] = -1
+    pairs = np.empty((len(found), 2), dtype=np.int64)
+    for k in range(len(found)):
+        pairs[k, 0], pairs[k, 1] = found[k]
+    return pairs
 
 
 def overlapping_pairs(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from scipy import ndimage
 
-from swarmshape.core.audit import overlaps
+from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.faults import Faults
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, TOUCH, Limits, positions, resolve_claims, step_sizes
@@ -177,6 +177,8 @@ class Swarm:
         self.params = params
         self.rng = np.random.default_rng(seed)
         self.group = np.repeat(np.arange(len(world.groups)), [g.agents for g in world.groups])
+        self._scratch = new_scratch(world.size)
+        """The overlap audit's per-cell working array."""
 
     # --- saving and resuming --------------------------------------------------------------------
 
@@ -405,6 +407,7 @@ class Swarm:
         self.offset[stopped] = 0.0
         self.speed[stopped] = 0.0
 
+
     def _behind_leaders(self, step: np.ndarray, room: np.ndarray) -> None:
         """Cap followers' steps so that each stays a whole cell behind its leader.
 
@@ -439,12 +442,15 @@ class Swarm:
     def _audit(self) -> None:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""
         world = self.world
-        here = np.flatnonzero(self.state != LOST) if self.faults.log else slice(None)
-        cell, direction, offset = self.cell[here], self.direction[here], self.offset[here]
-        i, j = overlaps(cell, direction, offset, world.seeds, world.size)
+        if len(self._scratch) != len(self.lattice.holder):  # the arena changed size
+            self._scratch = new_scratch(world.size)
+        present = self.state != LOST
+        i, j = overlaps(
+            self.cell, self.direction, self.offset, world.seeds, world.size, present, self._scratch
+        )
         if len(i) == 0:
             return
-        owner = np.concatenate([self.group[here], self._seed_group])
+        owner = np.concatenate([self.group, self._seed_group])
         self.overlap_total += len(i)
         np.add.at(self.overlaps, owner[i], 1)
         cross = owner[i] != owner[j]
