@@ -12,7 +12,9 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from numba import njit
 
+from swarmshape.core.lattice import FREE
 from swarmshape.errors import InputError
 
 STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
@@ -79,12 +81,106 @@ def step_sizes(
     speed (``max_speed``, times its `pace` if given), and is capped so that, braking at
     ``max_accel``, the robot stops within `room`. A room that never shrinks but by the robot's
     own motion (a fixed stopping point, or one moving ahead) never asks for harder braking."""
-    a = limits.max_accel
+    pace = np.ones(len(speed)) if pace is None else pace
+    return _step_sizes(speed, room, pace, limits.max_speed, limits.max_accel)
+
+
+@njit(cache=True)
+def _step_sizes(speed, room, pace, top, a):  # pragma: no cover (compiled)
+    out = np.empty(len(speed))
+    for i in range(len(speed)):
+        out[i] = _step_size(speed[i], room[i], top * pace[i], a)
+    return out
+
+
+@njit(cache=True)
+def _step_size(speed, room, top, a):  # pragma: no cover (compiled)
+    """One robot's step (see `step_sizes`)."""
     # the largest v whose braking run v + (v - a) + (v - 2a) + ... still fits in `room`
     whole = np.floor((np.sqrt(1.0 + 8.0 * room / a) - 1.0) / 2.0)
     stop_cap = (room + a * whole * (whole + 1.0) / 2.0) / (whole + 1.0)
-    top = np.full_like(speed, limits.max_speed) if pace is None else limits.max_speed * pace
-    return np.minimum.reduce([top, speed + a, stop_cap, room])
+    return min(top, speed + a, stop_cap, room)
+
+
+@njit(cache=True)
+def move(
+    cell, direction, ahead, offset, speed, distance, pace, leader, holder, queued, stride,
+    top, a, passes,
+):  # pragma: no cover (compiled)  # fmt: skip
+    """Advance every robot along its reserved run (its arrays, updated in place); a robot
+    reaching the next centre gives up the cell behind it (`holder` and `queued` by flat key) to
+    the robot queued for it if there is one. Followers stay behind their leaders (`follow`)."""
+    n = len(ahead)
+    room, step = np.zeros(n), np.zeros(n)
+    for r in range(n):
+        if ahead[r] > 0:
+            room[r] = max(ahead[r] - offset[r], 0.0)
+            step[r] = _step_size(speed[r], room[r], top * pace[r], a)
+    follow(cell, direction, offset, speed, pace, leader, room, step, top, a, passes)
+    for r in range(n):
+        offset[r] += step[r]
+        speed[r] = step[r]
+        distance[r] += step[r]
+    for r in range(n):
+        if ahead[r] == 0 or offset[r] < TOUCH:
+            continue
+        key = (cell[r, 0] + 1) * stride + cell[r, 1] + 1
+        taker = queued[key]
+        holder[key], queued[key] = taker, FREE
+        if taker >= 0:
+            leader[taker] = -1
+        cell[r, 0] += STEPS[direction[r], 0]
+        cell[r, 1] += STEPS[direction[r], 1]
+        ahead[r] -= 1
+        offset[r] -= 1.0
+        if ahead[r] == 0:
+            offset[r], speed[r] = 0.0, 0.0
+
+
+@njit(cache=True)
+def follow(
+    cell, direction, offset, speed, pace, leader, room, step, top, a, passes
+):  # pragma: no cover (compiled)
+    """Cap followers' steps so that each stays a whole cell behind its leader.
+
+    A follower may go as far as its leader's trailing edge after the leader's own step, and
+    plans to be able to stop there; a leader only moves on, so that never asks for harder
+    braking. Passes start from standing still and only raise steps, each computed against
+    leaders' steps of the pass before, so every pass is safe, and a train moves as one: up to
+    `passes` of them, each freeing one more link (a longer train moves with a short ripple)."""
+    followers = np.flatnonzero(leader >= 0)
+    lead = np.empty(len(followers))
+    first = np.full(len(step), -1)  # per robot, its followers as a linked list through `then`
+    then = np.empty(len(followers), dtype=np.int64)
+    for k in range(len(followers)):
+        f = followers[k]
+        ahead_by = 0
+        for axis in range(2):
+            ahead_by += (cell[leader[f], axis] - cell[f, axis]) * STEPS[direction[f], axis]
+        lead[k] = ahead_by + offset[leader[f]] - offset[f] - 1.0
+        step[f] = 0.0
+        then[k], first[leader[f]] = first[leader[f]], k
+    active, chosen = np.arange(len(followers)), np.empty(len(followers), dtype=np.int64)
+    capped = np.empty(len(followers))
+    for _ in range(passes):
+        for i in range(len(active)):
+            f = followers[active[i]]
+            wall = max(lead[active[i]] + step[leader[f]], 0.0)
+            capped[i] = _step_size(speed[f], min(room[f], wall), top * pace[f], a)
+        # only followers of robots that just went further can go further themselves
+        going = 0
+        for i in range(len(active)):
+            f = followers[active[i]]
+            if capped[i] > step[f]:
+                k = first[f]
+                while k >= 0:
+                    chosen[going] = k
+                    going += 1
+                    k = then[k]
+            step[f] = capped[i]
+        if going == 0:
+            return
+        active = chosen[:going].copy()
 
 
 def positions(cell: np.ndarray, direction: np.ndarray, offset: np.ndarray) -> np.ndarray:

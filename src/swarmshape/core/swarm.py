@@ -18,7 +18,7 @@ from scipy import ndimage
 from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.faults import Faults
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
-from swarmshape.core.motion import STEPS, TOUCH, Limits, positions, resolve_claims, step_sizes
+from swarmshape.core.motion import STEPS, Limits, move, positions, resolve_claims
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.states import LOST, SETTLED, STALLED, WAITING, State
 from swarmshape.core.world import World, WorldError
@@ -388,56 +388,14 @@ class Swarm:
         return passable & self.lattice.allows(keys, groups)
 
     def _move(self) -> None:
-        """Advance every robot along its reserved run; a robot reaching the next centre gives
-        up the cell behind it, to the robot queued for it if there is one."""
-        limits = self.params.limits
-        room = np.maximum(self.ahead - self.offset, 0.0)
-        step = step_sizes(self.speed, room, limits, self.pace)
-        step[self.ahead == 0] = 0.0
-        self._behind_leaders(step, room)
-        self.offset += step
-        self.speed[:] = step
-        self.distance += step
-        arrived = np.flatnonzero((self.ahead > 0) & (self.offset >= TOUCH))
-        self.leader[self.lattice.leave(self.lattice.key(self.cell[arrived]))] = -1
-        self.cell[arrived] += STEPS[self.direction[arrived]]
-        self.ahead[arrived] -= 1
-        self.offset[arrived] -= 1.0
-        stopped = arrived[self.ahead[arrived] == 0]
-        self.offset[stopped] = 0.0
-        self.speed[stopped] = 0.0
-
-
-    def _behind_leaders(self, step: np.ndarray, room: np.ndarray) -> None:
-        """Cap followers' steps so that each stays a whole cell behind its leader.
-
-        A follower may go as far as its leader's trailing edge after the leader's own step, and
-        plans to be able to stop there; a leader only moves on, so that never asks for harder
-        braking. Passes start from standing still and only raise steps, each computed against
-        leaders' steps of the pass before, so every pass is safe, and a train moves as one."""
-        followers = np.flatnonzero(self.leader >= 0)
-        if len(followers) == 0:
-            return
-        leaders = self.leader[followers]
-        along = STEPS[self.direction[followers]]
-        lead = ((self.cell[leaders] - self.cell[followers]) * along).sum(axis=1)
-        lead = lead + self.offset[leaders] - self.offset[followers] - 1.0
-        step[followers] = 0.0
-        active = np.arange(len(followers))
-        for _ in range(FOLLOW_PASSES):
-            f = followers[active]
-            wall = np.maximum(lead[active] + step[leaders[active]], 0.0)
-            capped = step_sizes(
-                self.speed[f], np.minimum(room[f], wall), self.params.limits, self.pace[f]
-            )
-            raised = capped > step[f]
-            step[f] = capped
-            # only followers of robots that just went further can go further themselves
-            moved_on = np.zeros(len(step), dtype=bool)
-            moved_on[f[raised]] = True
-            active = np.flatnonzero(moved_on[leaders])
-            if len(active) == 0:
-                return
+        """Advance every robot along its reserved run (see `motion.move`); a robot reaching the
+        next centre gives up the cell behind it, to the robot queued for it if there is one."""
+        limits, lattice = self.params.limits, self.lattice
+        move(
+            self.cell, self.direction, self.ahead, self.offset, self.speed, self.distance,
+            self.pace, self.leader, lattice.holder, lattice.queued, lattice.stride,
+            limits.max_speed, limits.max_accel, FOLLOW_PASSES,
+        )  # fmt: skip
 
     def _audit(self) -> None:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""
