@@ -188,12 +188,22 @@ def positions(cell: np.ndarray, direction: np.ndarray, offset: np.ndarray) -> np
     return cell + 0.5 + offset[:, None] * STEPS[direction]
 
 
-def resolve_claims(keys: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Among claims on the same cell key, pick one winner at random; return a winner mask."""
-    shuffled = rng.permutation(len(keys))
-    _, first = np.unique(keys[shuffled], return_index=True)
-    wins = np.zeros(len(keys), dtype=bool)
-    wins[shuffled[first]] = True
+def resolve_claims(keys: np.ndarray, rng: np.random.Generator, scratch: np.ndarray) -> np.ndarray:
+    """Among claims on the same cell key, pick one winner at random; return a winner mask.
+    `scratch` holds -1 for every key, and is left so (see `audit.new_scratch`)."""
+    return _first_claims(keys, rng.permutation(len(keys)), scratch)
+
+
+@njit(cache=True)
+def _first_claims(keys, shuffled, scratch):  # pragma: no cover (compiled)
+    """The first claim on each key in `shuffled` order wins."""
+    wins = np.zeros(len(keys), dtype=np.bool_)
+    for claim in shuffled:
+        if scratch[keys[claim]] < 0:
+            scratch[keys[claim]] = claim
+            wins[claim] = True
+    for claim in shuffled:
+        scratch[keys[claim]] = -1
     return wins
 
 

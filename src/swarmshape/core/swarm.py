@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+from numba import njit
 from scipy import ndimage
 
 from swarmshape.core.audit import new_scratch, overlaps
@@ -178,7 +179,7 @@ class Swarm:
         self.rng = np.random.default_rng(seed)
         self.group = np.repeat(np.arange(len(world.groups)), [g.agents for g in world.groups])
         self._scratch = new_scratch(world.size)
-        """The overlap audit's per-cell working array."""
+        """A per-cell working array of -1 for the audit and the claims (left so after use)."""
 
     # --- saving and resuming --------------------------------------------------------------------
 
@@ -362,7 +363,7 @@ class Swarm:
         holder = self.lattice.holder[keys]
         follows = self.followable(keys, directions)
         wins = (holder == FREE) | follows
-        wins[wins] = resolve_claims(keys[wins], self.rng)
+        wins[wins] = resolve_claims(keys[wins], self.rng, self._scratch)
         winners = robots[wins]
         queued = wins & follows
         self.lattice.holder[keys[wins & ~queued]] = robots[wins & ~queued]
@@ -375,11 +376,11 @@ class Swarm:
     def followable(self, keys: np.ndarray, directions: np.ndarray) -> np.ndarray:
         """Cells whose robot is already leaving them in `directions`, with nobody queued yet: a
         robot coming the same way may follow it in, never closer than touching."""
-        holder = self.lattice.holder[keys]
-        robot = np.maximum(holder, 0)
-        leaving = (self.ahead[robot] > 0) & (self.direction[robot] == directions)
-        in_it = self.lattice.key(self.cell[robot]) == keys
-        return (holder >= 0) & leaving & in_it & (self.lattice.queued[keys] == FREE)
+        lattice = self.lattice
+        return _followable(
+            keys, directions, lattice.holder, lattice.queued, self.ahead, self.direction,
+            self.cell, lattice.stride,
+        )  # fmt: skip
 
     def enterable(self, keys: np.ndarray, groups: np.ndarray, directions: np.ndarray) -> np.ndarray:
         """Cells a robot of `groups` coming in `directions` may claim: free or followable, and
@@ -400,8 +401,6 @@ class Swarm:
     def _audit(self) -> None:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""
         world = self.world
-        if len(self._scratch) != len(self.lattice.holder):  # the arena changed size
-            self._scratch = new_scratch(world.size)
         present = self.state != LOST
         i, j = overlaps(
             self.cell, self.direction, self.offset, world.seeds, world.size, present, self._scratch
@@ -624,6 +623,21 @@ class Swarm:
     def _mobile(self) -> np.ndarray:
         """Per robot, whether it can still move (neither lost nor stalled)."""
         return (self.state != LOST) & (self.state != STALLED)
+
+
+@njit(cache=True)
+def _followable(
+    keys, directions, holder, queued, ahead, direction, cell, stride
+):  # pragma: no cover (compiled)
+    """`Swarm.followable` over the lattice's flat arrays."""
+    out = np.zeros(len(keys), dtype=np.bool_)
+    for i in range(len(keys)):
+        robot = holder[keys[i]]
+        if robot < 0 or queued[keys[i]] != FREE:
+            continue
+        leaving = ahead[robot] > 0 and direction[robot] == directions[i]
+        out[i] = leaving and (cell[robot, 0] + 1) * stride + cell[robot, 1] + 1 == keys[i]
+    return out
 
 
 def _renumbering(old: np.ndarray, new: np.ndarray, size: tuple[int, int]) -> np.ndarray:
