@@ -93,3 +93,22 @@ def test_a_mover_that_just_traded_targets_does_not_also_swap_with_a_settled_robo
     assert steering.target[behind] == target_at(0, 1), "the two movers traded targets"
     assert steering.target[front] == target_at(3, 0)
     assert swarm.state[settled] == SETTLED and steering.target[settled] == target_at(2, 0)
+
+
+def test_ring_members_are_exactly_the_robots_a_walk_leads_back_to():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        robots = int(rng.integers(1, 30))
+        waiting = rng.permutation(robots)[: rng.integers(0, robots + 1)]
+        waited_for = rng.integers(0, robots, len(waiting))
+        next_of = dict(zip(waiting.tolist(), waited_for.tolist(), strict=True))
+        expected = []
+        for robot in range(robots):
+            at = next_of.get(robot)
+            for _ in range(robots):
+                if at is None or at == robot:
+                    break
+                at = next_of.get(at)
+            if at == robot:
+                expected.append(robot)
+        assert ring_members(waiting, waited_for, robots).tolist() == expected

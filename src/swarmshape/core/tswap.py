@@ -17,21 +17,41 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numba import njit
 
 
 def ring_members(waiting: np.ndarray, waited_for: np.ndarray, robots: int) -> np.ndarray:
-    """Robots on rings of the "waits for" graph, where ``waiting[k]`` waits for ``waited_for[k]``.
+    """Robots on rings of the "waits for" graph, where ``waiting[k]`` waits for ``waited_for[k]``
+    (robot numbers below `robots`), in increasing order.
 
-    Pointer doubling: after more jumps than there are waiting robots every walk has either run
-    out (-1) or is going round a ring, and the places the walks reach are the ring members.
-    """
-    next_of = np.full(robots + 1, -1)  # the extra last slot keeps -1 at -1
-    next_of[waiting] = waited_for
-    jump = next_of.copy()
-    for _ in range(len(waiting).bit_length()):
-        jump = jump[jump]
-    reached = jump[waiting]
-    return np.unique(reached[reached >= 0])
+    Each robot waits for at most one other, so a walk from any waiting robot either runs out or
+    runs into a ring; walks stop at robots an earlier walk went through, so each robot is
+    visited once."""
+    return _on_rings(waiting, waited_for, robots)
+
+
+@njit(cache=True)
+def _on_rings(waiting, waited_for, robots):  # pragma: no cover (compiled)
+    next_of = np.full(robots, -1)
+    for k in range(len(waiting)):
+        next_of[waiting[k]] = waited_for[k]
+    seen = np.zeros(robots, dtype=np.int8)  # 1: on the current walk, 2: on an earlier one
+    ring = np.zeros(robots, dtype=np.bool_)
+    for start in waiting:
+        robot = start
+        while robot >= 0 and seen[robot] == 0:
+            seen[robot] = 1
+            robot = next_of[robot]
+        if robot >= 0 and seen[robot] == 1:  # the walk closed a ring of its own
+            member = robot
+            while not ring[member]:
+                ring[member] = True
+                member = next_of[member]
+        robot = start
+        while robot >= 0 and seen[robot] == 1:
+            seen[robot] = 2
+            robot = next_of[robot]
+    return np.flatnonzero(ring)
 
 
 def rotate_rings(waiting: np.ndarray, waited_for: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
