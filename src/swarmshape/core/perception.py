@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from swarmshape.core.shape import Pose
 from swarmshape.errors import InputError
@@ -167,18 +168,38 @@ def neighbours(
     whose cells lie within `reach`, in CSR rows ordered by the order of `reach`. Robots not
     `present` (removed by a fault) neither sense nor are sensed. One gather of every robot's
     every offset from a padded grid of who is where, never a loop over robots."""
+    here = np.arange(len(cell)) if present is None else np.flatnonzero(present)
+    return _neighbours(cell, seeds, size[0], size[1], reach, here)
+
+
+@njit(cache=True)
+def _neighbours(cell, seeds, width, height, reach, here):  # pragma: no cover (compiled)
+    """`neighbours` on a padded grid of who is where, counted and then filled robot by robot."""
     n = len(cell)
-    here = np.arange(n) if present is None else np.flatnonzero(present)
-    r = int(np.abs(reach).max()) if len(reach) else 0
-    who = np.full((size[0] + 2 * r, size[1] + 2 * r), -1, dtype=np.int64)
-    who[cell[here, 0] + r, cell[here, 1] + r] = here
-    who[seeds[:, 0] + r, seeds[:, 1] + r] = n + np.arange(len(seeds))
-    stride = who.shape[1]
-    base = (cell[here, 0] + r) * stride + (cell[here, 1] + r)
-    found = who.ravel()[base[:, None] + (reach[:, 0] * stride + reach[:, 1])[None, :]]
-    hit = np.flatnonzero(found >= 0)  # row-major: by robot, then in reach order
-    owner = here[hit // max(1, len(reach))]
-    other = found.ravel()[hit]
+    r = 0
+    for k in range(len(reach)):
+        r = max(r, abs(reach[k, 0]), abs(reach[k, 1]))
+    stride = height + 2 * r
+    who = np.full((width + 2 * r) * stride, -1)
+    for robot in here:
+        who[(cell[robot, 0] + r) * stride + cell[robot, 1] + r] = robot
+    for s in range(len(seeds)):
+        who[(seeds[s, 0] + r) * stride + seeds[s, 1] + r] = n + s
+    shift = reach[:, 0] * stride + reach[:, 1]
     start = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(owner, minlength=n), out=start[1:])
+    for robot in here:
+        base = (cell[robot, 0] + r) * stride + cell[robot, 1] + r
+        for d in shift:
+            if who[base + d] >= 0:
+                start[robot + 1] += 1
+    for robot in range(n):
+        start[robot + 1] += start[robot]
+    owner = np.empty(start[n], dtype=np.int64)
+    other = np.empty(start[n], dtype=np.int64)
+    for robot in here:
+        base, entry = (cell[robot, 0] + r) * stride + cell[robot, 1] + r, start[robot]
+        for d in shift:
+            if who[base + d] >= 0:
+                owner[entry], other[entry] = robot, who[base + d]
+                entry += 1
     return start, owner, other
