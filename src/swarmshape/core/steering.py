@@ -197,6 +197,7 @@ class Steering:
         """What the rules derive from the world's targets (again after a reshape)."""
         self.target_mask = self.swarm.world.mask(self.swarm.world.targets)
         self._crossings = CrossingCounter(self.target_mask)
+        self._open: dict[int, np.ndarray] = {}
 
     def start(self) -> None:
         self.strategy.on_start(self.view)
@@ -586,25 +587,36 @@ class Steering:
         swarm = self.swarm
         holder = swarm.lattice.grid
         robot_here = holder >= 0
-        robot = np.maximum(holder, 0)
-        settled = robot_here & (swarm.state[robot] == SETTLED)
-        resting = robot_here & (swarm.state[robot] != MOVING)
-        stalled = robot_here & (swarm.state[robot] == STALLED)
-        width, height = swarm.world.size
-        owner = swarm.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
+        # the robots' states cell by cell, only when a view needs them (a whole-arena gather)
+        stalls = bool((swarm.state == STALLED).any())
+        wanted = stalls or self.motion is Motion.ROUTE or bool(self.recruited[needing].any())
+        state = np.where(robot_here, swarm.state[np.maximum(holder, 0)], -1) if wanted else None
         for group in np.unique(swarm.group[needing]).tolist():
-            fixed = (holder == SEED) | ((owner >= 0) & (owner != group)) | stalled
+            unfixed = self._unfixed(group) & (state != STALLED) if stalls else self._unfixed(group)
             if self.motion is Motion.ROUTE:
-                views = [~fixed & ~robot_here, ~fixed & ~resting, ~fixed & ~settled]
+                resting = robot_here & (state != MOVING)
+                views = [unfixed & ~robot_here, unfixed & ~resting, unfixed & (state != SETTLED)]
+            else:
+                views = [unfixed & (state != SETTLED) if wanted else None, unfixed]
             for agent in [a for a in needing if swarm.group[a] == group]:
-                if self.motion is Motion.SWAP:
-                    views = [~fixed & ~settled, ~fixed] if self.recruited[agent] else [~fixed]
-                cell = swarm.cell[agent]
-                own = [view.copy() for view in views]
-                for view in own:
-                    view[cell[0], cell[1]] = True
+                own = views if self.motion is Motion.ROUTE or self.recruited[agent] else views[1:]
+                x, y = swarm.cell[agent]
+                was = [view[x, y] for view in own]
+                for view in own:  # its own cell is open to it (put back after)
+                    view[x, y] = True
                 goal = swarm.world.targets[self.target[agent]]
-                self.planner.plan(agent, cell, goal, own)
+                self.planner.plan(agent, swarm.cell[agent], goal, own)
+                for view, value in zip(own, was, strict=True):
+                    view[x, y] = value
+
+    def _unfixed(self, group: int) -> np.ndarray:
+        """Cells not closed to `group` for good: neither a seed nor another group's shape (kept
+        until the world changes; a planner may open a cell in it and close it again)."""
+        if group not in self._open:
+            lattice, (width, height) = self.swarm.lattice, self.swarm.world.size
+            owner = lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
+            self._open[group] = ~((lattice.grid == SEED) | ((owner >= 0) & (owner != group)))
+        return self._open[group]
 
 
 @dataclass(frozen=True)
