@@ -16,7 +16,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from swarmshape.core.motion import STEPS, inside
+from swarmshape.core.motion import STEPS, inside, rows
 from swarmshape.core.snapshot import Snapshot
 
 WINDOW_MARGIN = 6
@@ -71,7 +71,7 @@ def straight_preferences(
     x_first = keep_x
     turning = np.flatnonzero(~keep_x & ~keep_y & (along_x > 0) & (along_y > 0))
     if len(turning):
-        fewer, tie = crossings.x_first_crosses_less(origin[turning], goal[turning])
+        fewer, tie = crossings.x_first_crosses_less(rows(origin, turning), rows(goal, turning))
         longer = np.abs(dx[turning]) >= np.abs(dy[turning])
         x_first[turning] = np.where(tie, longer, fewer)
     first = np.where(x_first, along_x, along_y)

@@ -20,7 +20,7 @@ import numpy as np
 from swarmshape.core.assignment import Matcher, greedy
 from swarmshape.core.lattice import FREE, SEED, WALL
 from swarmshape.core.messages import MessageQueue
-from swarmshape.core.motion import STEPS, Motion
+from swarmshape.core.motion import STEPS, Motion, rows
 from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
 from swarmshape.core.snapshot import Snapshot, decode_attributes, encode_attributes, prefixed
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING
@@ -316,7 +316,11 @@ class Steering:
         )
         lattice, cell = self.swarm.lattice, self.swarm.cell
         origins = np.concatenate(
-            [steps.origin_key[steps.may], lattice.key(cell[steppers]), lattice.key(cell[stuck])]
+            [
+                steps.origin_key[steps.may],
+                lattice.key(rows(cell, steppers)),
+                lattice.key(rows(cell, stuck)),
+            ]
         )
         winners = self.swarm.claim(robots, directions, origins)
         self._count_waiting(starters, stuck, steps, winners)
@@ -325,8 +329,8 @@ class Steering:
         """Moving robots resting on their own target settle there; the strategy hears of it."""
         swarm = self.swarm
         candidates = np.flatnonzero((swarm.state == MOVING) & (swarm.ahead == 0))
-        goals = swarm.world.targets[self.target[candidates]]
-        done = candidates[(swarm.cell[candidates] == goals).all(axis=1)]
+        goals = rows(swarm.world.targets, self.target[candidates])
+        done = candidates[(rows(swarm.cell, candidates) == goals).all(axis=1)]
         swarm.state[done] = SETTLED
         swarm.filled[self.target[done]] = True
         self.routed[done] = False  # the way it went round something is behind it
@@ -395,7 +399,8 @@ class Steering:
         """Each mover's next cell: its first choice if enterable, else (for starters) its second;
         cruisers may only extend their run straight on. Starters that cannot go are blocked."""
         swarm, lattice = self.swarm, self.swarm.lattice
-        origin = swarm.cell[movers] + STEPS[swarm.direction[movers]] * swarm.ahead[movers, None]
+        along = rows(STEPS, swarm.direction[movers]) * swarm.ahead[movers, None]
+        origin = rows(swarm.cell, movers) + along
         first, second = self._preferences(movers, origin)
         origin_key = lattice.key(origin)
         groups = swarm.group[movers]
@@ -489,7 +494,7 @@ class Steering:
         routed round something, else lattice distance. Measured by lattice distance alone, a
         trade sent a mover round a stalled robot back the target it had just swapped on, for
         good (a square with 5 % stalled early, under `greedy`)."""
-        goals = self.swarm.world.targets[self.target[robots]]
+        goals = rows(self.swarm.world.targets, self.target[robots])
         routed = self.routed[robots] & self.planner.planned(robots)
         return np.where(
             routed, self.planner.remaining(robots, cells), np.abs(cells - goals).sum(axis=1)
@@ -498,7 +503,7 @@ class Steering:
     def _in_own_shape(self, robots: np.ndarray) -> np.ndarray:
         """Whether each robot rests on a cell of its own group's shape."""
         lattice = self.swarm.lattice
-        return lattice.owner[lattice.key(self.swarm.cell[robots])] == self.swarm.group[robots]
+        return lattice.owner[lattice.key(rows(self.swarm.cell, robots))] == self.swarm.group[robots]
 
     def _hand_over(self, movers: np.ndarray, wanderers: np.ndarray) -> None:
         """A wanderer caught inside its shape, in a mover's way, takes the mover's target and
@@ -546,7 +551,7 @@ class Steering:
         if len(robots) == 0:
             return np.zeros(0, dtype=np.int64)
         swarm, lattice = self.swarm, self.swarm.lattice
-        here = lattice.key(swarm.cell[robots])
+        here = lattice.key(rows(swarm.cell, robots))
         near = here[:, None] + lattice.offsets[None, 1:]
         groups = np.full(len(robots), -1) if own_shape_too else swarm.group[robots]
         ok = lattice.enterable(near, groups[:, None])

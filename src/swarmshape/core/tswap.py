@@ -19,6 +19,8 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
+from swarmshape.core.motion import rows
+
 
 def ring_members(waiting: np.ndarray, waited_for: np.ndarray, robots: int) -> np.ndarray:
     """Robots on rings of the "waits for" graph, where ``waiting[k]`` waits for ``waited_for[k]``
@@ -89,10 +91,11 @@ def shortening_swaps(
     is how far each robot's goal lies from `cells`. Crossing lanes tangle into long chains of
     robots each waiting on the next, and crossing paths often tie; a trade usually sends both
     the way that is free. No robot is in two pairs."""
-    own = trip(waiting, cell[waiting])
-    taken = trip(waited_for, cell[waiting])
-    now = own + trip(waited_for, cell[waited_for])
-    traded = taken + trip(waiting, cell[waited_for])
+    at_waiting, at_waited_for = rows(cell, waiting), rows(cell, waited_for)
+    own = trip(waiting, at_waiting)
+    taken = trip(waited_for, at_waiting)
+    now = own + trip(waited_for, at_waited_for)
+    traded = taken + trip(waiting, at_waited_for)
     pairs = np.flatnonzero((traded < now) | ((traded == now) & (taken < own)))
     everyone = np.concatenate([waiting[pairs], waited_for[pairs]])
     once = np.bincount(everyone, minlength=len(cell))[everyone] == 1
