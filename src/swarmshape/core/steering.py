@@ -329,8 +329,8 @@ class Steering:
         """Moving robots resting on their own target settle there; the strategy hears of it."""
         swarm = self.swarm
         candidates = np.flatnonzero((swarm.state == MOVING) & (swarm.ahead == 0))
-        goals = rows(swarm.world.targets, self.target[candidates])
-        done = candidates[(rows(swarm.cell, candidates) == goals).all(axis=1)]
+        apart = rows(swarm.cell, candidates) - rows(swarm.world.targets, self.target[candidates])
+        done = candidates[(apart[:, 0] == 0) & (apart[:, 1] == 0)]
         swarm.state[done] = SETTLED
         swarm.filled[self.target[done]] = True
         self.routed[done] = False  # the way it went round something is behind it
@@ -494,11 +494,11 @@ class Steering:
         routed round something, else lattice distance. Measured by lattice distance alone, a
         trade sent a mover round a stalled robot back the target it had just swapped on, for
         good (a square with 5 % stalled early, under `greedy`)."""
-        goals = rows(self.swarm.world.targets, self.target[robots])
-        routed = self.routed[robots] & self.planner.planned(robots)
-        return np.where(
-            routed, self.planner.remaining(robots, cells), np.abs(cells - goals).sum(axis=1)
-        )
+        apart = cells - rows(self.swarm.world.targets, self.target[robots])
+        trips = (np.abs(apart[:, 0]) + np.abs(apart[:, 1])).astype(np.float64)
+        routed = np.flatnonzero(self.routed[robots] & self.planner.planned(robots))
+        trips[routed] = self.planner.remaining(robots[routed], rows(cells, routed))
+        return trips
 
     def _in_own_shape(self, robots: np.ndarray) -> np.ndarray:
         """Whether each robot rests on a cell of its own group's shape."""
