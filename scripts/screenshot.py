@@ -16,7 +16,8 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import pygame
 
-from swarmshape.runs import configure, load_world, start_cells, start_swarm
+from swarmshape.config import configure
+from swarmshape.runs import load_world, start_cells, start_swarm
 from swarmshape.ui.render import OVERLAYS
 from swarmshape.ui.viewer import Viewer
 

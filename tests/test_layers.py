@@ -21,13 +21,14 @@ ALLOWED = {
                    "swarmshape.strategies"},
     "io": {"numpy", "PIL", "swarmshape.core", "swarmshape.errors", "swarmshape.io"},
     "ui": {"numpy", "scipy", "pygame", "PIL", "swarmshape.core", "swarmshape.errors",
-           "swarmshape.io", "swarmshape.ui", "swarmshape.runs"},
+           "swarmshape.io", "swarmshape.ui", "swarmshape.runs", "swarmshape.config"},
     "experiments": {"numpy", "matplotlib", "dask", "swarmshape.core", "swarmshape.errors",
-                    "swarmshape.io", "swarmshape.experiments", "swarmshape.runs"},
+                    "swarmshape.io", "swarmshape.experiments", "swarmshape.runs",
+                    "swarmshape.config"},
     # the learning environment draws with the window's renderer, loaded only to render
     "env": {"numpy", "gymnasium", "pettingzoo", "pygame", "swarmshape.core",
             "swarmshape.errors", "swarmshape.io", "swarmshape.env", "swarmshape.runs",
-            "swarmshape.ui.render"},
+            "swarmshape.config", "swarmshape.ui.render"},
 }  # fmt: skip
 
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmshape.config import RunConfig
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
 from swarmshape.core.swarm import Swarm
@@ -25,16 +26,7 @@ from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
 from swarmshape.io.files import check_output, distinct_outputs, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour
-from swarmshape.runs import (
-    Observer,
-    RunConfig,
-    Runner,
-    load_world,
-    resume,
-    save,
-    start_cells,
-    start_swarm,
-)
+from swarmshape.runs import Observer, Runner, load_world, resume, save, start_cells, start_swarm
 
 OUTPUT_OPTIONS = ("metrics", "record", "frames", "trace", "save_state", "positions")
 

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from swarmshape.core.local import Memory, Program, ProgramError, Slot, _link_up
 from swarmshape.core.perception import Perception, Senses, neighbours
 from swarmshape.core.shape import Pose, Shape
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import run
 
@@ -96,11 +96,10 @@ def test_a_program_returning_nonsense_is_one_clear_error():
 
 def test_a_lost_link_is_lost_both_ways():
     world = world_of(np.ones((3, 4), dtype=bool), 12)
-    program = Drift(Senses(msg_loss=0.5))
-    swarm = Swarm(world, program, seed=3)
+    swarm = Swarm(world, Drift(), seed=3, params=Params(senses=Senses(msg_loss=0.5)))
     sense = swarm.driver.perceive()
     _, owner, other = neighbours(
-        swarm.cell, swarm.world.seeds, swarm.world.size, program.senses.reach()
+        swarm.cell, swarm.world.seeds, swarm.world.size, swarm.params.senses.reach()
     )
     heard = {(int(a), int(b)): bool(h) for a, b, h in zip(owner, other, sense.heard, strict=True)}
     links = [(a, b) for (a, b) in heard if b < len(swarm.cell)]
@@ -154,7 +153,7 @@ def test_a_translated_scenario_runs_the_same_translated(dx, dy, turns, seed, noi
         moved = Pose(pose.x + shift[0], pose.y + shift[1], pose.rotation)
         world = world_of(grid, 12, moved, arena=(80 + dx, 80 + dy))
         start = np.argwhere(np.ones((3, 4), dtype=bool)) + np.array([42, 42]) + shift
-        swarm = Swarm(world, Drift(senses), seed=seed, start=start)
+        swarm = Swarm(world, Drift(), seed, Params(senses=senses), start)
         trail = []
         for _ in range(WALL_FREE_STEPS):
             swarm.step()

@@ -145,7 +145,7 @@ def test_the_environment_shows_each_robot_exactly_what_a_local_program_senses():
     vec = learn.vector_env("shapes/star.png", cells=8, message_range=(0, 1000), **options)
     obs, _ = vec.reset(seed=3)
     episode = vec.episode
-    program = Nearest(episode.config.senses())
+    program = Nearest()
     program.seen = []
     config = dataclasses.replace(episode.config, seed=episode.swarm.seed)
     itself = start_swarm(config, episode.world, None, program)
@@ -279,7 +279,9 @@ def test_actions_are_checked():
         ({"strategy": "optimal"}, "strategy is not an environment option"),
         ({"seed": 1}, "reset"),
         ({"cells": 4}, "cells applies to an image"),
-        ({"colour": 1}, "unknown run option 'colour'"),
+        ({"colour": 1}, "colour is not a run setting"),
+        ({"options": {"order": "random"}}, "order is an option of paper, not of"),
+        ({"options": {"message_size": 99}}, "message_size must be a whole number from 0 to 64"),
         ({"message_range": (3, 1)}, "message_range"),
     ],
 )
@@ -318,7 +320,7 @@ def test_the_batched_interface_takes_one_array_per_step():
 
 
 def test_memory_slots_of_a_program_are_not_needed_by_the_relay():
-    relay = learn.Relay(message_size=2)
+    relay = learn.Relay(learn.Relay.Options(message_size=2))
     assert relay.memory == {} and relay.message_size == 2
     moves, messages = np.zeros(3, np.int64), np.zeros((3, 2), np.int64)
     relay.give(moves, messages)

@@ -26,11 +26,11 @@ from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import (
     Blueprint,
     Perception,
-    Senses,
     neighbours,
     quarter_turns,
     turn,
 )
+from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING
 from swarmshape.errors import InputError
@@ -74,30 +74,21 @@ class ProgramError(InputError):
     """A program returned something the core cannot act on; the message says what."""
 
 
-class Program:
+class Program(Plugin):
     """Base class of local programs. Subclass it, give it a ``name``, a one-line
     ``description``, the ``message_size`` (ints per broadcast), the ``memory`` it keeps, and
     write `act`. Randomness comes only from the `rng` passed in."""
 
-    name: ClassVar[str]
-    description: ClassVar[str]
     kind: ClassVar[str] = "local"
     message_size: ClassVar[int] = 0
     memory: ClassVar[dict[str, Slot]] = {}
     states: ClassVar[tuple[str, ...]] = ()
     """Names of the values of ``memory.state``, if the program keeps one (the viewer colours
     robots by it)."""
-    grows_from_seeds: ClassVar[bool] = False
-    """True if the program builds outward from the seeds, so it can form only a shape's
-    `Shape.solid` part (one piece with its seeds, no holes): checks and tests then give it
-    solid shapes, and a run warns about any other."""
     shown: ClassVar[str | None] = None
     """The integer memory slot the viewer can print on each robot (a gradient, a hop count), so
     a program's field can be seen without a debugger; values 0 to 998 are printed, others
     (999 or more, negative) mean "unknown" and are left blank."""
-
-    def __init__(self, senses: Senses | None = None) -> None:
-        self.senses = senses or Senses()
 
     def act(
         self, sense: Perception, memory: Memory, rng: np.random.Generator
@@ -116,7 +107,6 @@ class Program:
         return np.zeros(len(memory), dtype=bool)
 
     def drive(self, swarm: Swarm) -> LocalControl:
-        """The swarm's driver for this plug-in (the core's side of the contract)."""
         return LocalControl(swarm, self)
 
 
@@ -144,7 +134,7 @@ class LocalControl:
         self.memory = Memory(program.memory, n)
         self.broadcast = np.zeros((n, program.message_size), dtype=np.int64)
         self.last_cell = swarm.cell.copy()
-        self.reach = program.senses.reach()
+        self.reach = swarm.params.senses.reach()
         self.sent = 0
         self.lost = 0
         self.quiet_steps = 0
@@ -219,7 +209,7 @@ class LocalControl:
         row by row, every field read strides over all the others (local-swap at 10,000 robots:
         240 to 255 ms a step, against 161 ms field by field)."""
         swarm = self.swarm
-        n, senses = len(swarm.cell), self.program.senses
+        n, senses = len(swarm.cell), swarm.params.senses
         seeds = swarm.world.seeds
         present = swarm.present
         start, owner, other = neighbours(swarm.cell, seeds, swarm.world.size, self.reach, present)
@@ -265,6 +255,7 @@ class LocalControl:
             seed_frame=seed_frame,
             blueprint=self.blueprint,
             step=swarm.step_count,
+            radius=senses.radius,
         )
 
     def _checked(self, moves: Any, messages: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -13,7 +13,8 @@ from enum import Enum
 
 import numpy as np
 
-from swarmshape.errors import InputError
+from swarmshape.core.options import checked, option
+from swarmshape.errors import SettingError
 
 STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
 """Direction index -> unit step; index 0 means "no direction"."""
@@ -45,17 +46,15 @@ class Motion(Enum):
 class Limits:
     """Kinematic limits in cells per step (speed) and cells per step squared (acceleration)."""
 
-    max_speed: float = 0.5
-    max_accel: float = 0.125
+    max_speed: float = option(0.5, "cells per step", at_least=SLOWEST, at_most=1.0)
+    max_accel: float = option(0.125, "cells per step squared", at_least=SLOWEST, at_most=1.0)
 
     def __post_init__(self) -> None:
-        if not SLOWEST <= self.max_speed <= 1.0:
-            raise InputError(
-                f"max speed must be in [{SLOWEST}, 1] cells per step, got {self.max_speed}"
-            )
-        if not SLOWEST <= self.max_accel <= self.max_speed:
-            raise InputError(
-                f"max acceleration must be in [{SLOWEST}, max speed], got {self.max_accel}"
+        checked(self)
+        if self.max_accel > self.max_speed:
+            raise SettingError(
+                "max_accel",
+                f"must be at most max_speed ({self.max_speed:g}), got {self.max_accel:g}",
             )
 
 

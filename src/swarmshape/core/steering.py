@@ -22,6 +22,7 @@ from swarmshape.core.lattice import FREE, SEED, WALL
 from swarmshape.core.messages import MessageQueue
 from swarmshape.core.motion import STEPS, Motion
 from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
+from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot, decode_attributes, encode_attributes, prefixed
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING
 from swarmshape.core.tswap import one_per_blocker, rotate_rings, shortening_swaps
@@ -32,7 +33,7 @@ if TYPE_CHECKING:
     from swarmshape.core.world import World
 
 
-class Strategy:
+class Strategy(Plugin):
     """Base class of central planners: who goes to which target cell, and when.
 
     Subclass it, give it a ``name`` and a one-line ``description``, and hand out targets in
@@ -40,8 +41,6 @@ class Strategy:
     Randomness must come from ``swarm.rng`` so that runs repeat exactly per seed.
     """
 
-    name: ClassVar[str]
-    description: ClassVar[str]
     kind: ClassVar[str] = "central"
     motion: ClassVar[Motion] = Motion.SWAP
 
@@ -66,18 +65,20 @@ class Strategy:
         swarm.recruit(group)
 
     def drive(self, swarm: Swarm) -> Steering:
-        """The swarm's driver for this plug-in (the core's side of the contract)."""
         return Steering(swarm, self)
 
     def snapshot(self) -> dict[str, Any]:
-        """What a saved run keeps of this strategy. Default: every attribute, which must be a
-        number, text, a numpy array, or a list of them."""
-        return encode_attributes(f"strategy {self.name!r}", vars(self))
+        """What a saved run keeps of this strategy. Default: every attribute but its options
+        (the run keeps those), each a number, text, a numpy array, or a list of them."""
+        return encode_attributes(f"strategy {self.name!r}", self._state())
 
     def restore(self, saved: Snapshot, swarm: SwarmView) -> None:
         """Take back what `snapshot` saved, into a freshly made strategy."""
-        for name, value in decode_attributes(saved, vars(self)).items():
+        for name, value in decode_attributes(saved, self._state()).items():
             setattr(self, name, value)
+
+    def _state(self) -> dict[str, Any]:
+        return {name: value for name, value in vars(self).items() if name != "options"}
 
 
 class SwarmView:

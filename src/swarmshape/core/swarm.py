@@ -9,6 +9,7 @@ never imports pygame.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -19,12 +20,15 @@ from swarmshape.core.audit import overlaps
 from swarmshape.core.faults import Faults
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, TOUCH, Limits, positions, resolve_claims, step_sizes
+from swarmshape.core.options import option, spec_of
+from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.states import LOST, SETTLED, STALLED, WAITING, State
 from swarmshape.core.world import World, WorldError
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
+    from swarmshape.core.plugin import Plugin
     from swarmshape.core.shape import Pose, Shape
 
 FOLLOW_PASSES = 64
@@ -41,17 +45,22 @@ class Params:
     """Behaviour knobs shared by all robots."""
 
     limits: Limits = field(default_factory=Limits)
+    senses: Senses = field(default_factory=Senses)
+    """How well a local program's robots sense and talk (the run's, not the program's)."""
     wander_rate: float = 0.1
     """Chance per step that a resting spare robot tries a random step."""
     patience: int = 3
     """Steps a mover waits behind a resting robot before it replans; twice that, it sidesteps."""
-    speed_variation: float = 0.0
-    """Each robot's top speed is ``limits.max_speed`` times a factor from ``[1 - this, 1]``,
-    drawn once (real robots differ; slow ones make traffic jams)."""
+    speed_variation: float = option(
+        0.0,
+        "each robot's top speed is max_speed times a factor drawn once from [1 - this, 1] "
+        "(real robots differ; slow ones make traffic jams)",
+        at_least=0.0,
+        at_most=0.9,
+    )
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.speed_variation <= 0.9:
-            raise InputError(f"--speed-variation must be from 0 to 0.9, got {self.speed_variation}")
+        spec_of(Params, "speed_variation").check(self.speed_variation)
 
 
 class Driver(Protocol):
@@ -101,14 +110,6 @@ class Driver(Protocol):
 
     def restore(self, saved: Snapshot) -> None:
         """Take back what `snapshot` saved (the swarm's own arrays are back already)."""
-
-
-class Plugin(Protocol):
-    """A strategy (or any other plug-in kind): it names itself and drives a swarm."""
-
-    name: str
-
-    def drive(self, swarm: Swarm) -> Driver: ...
 
 
 class Swarm:
@@ -190,6 +191,7 @@ class Swarm:
             "wander_rate": self.params.wander_rate,
             "patience": self.params.patience,
             "speed_variation": self.params.speed_variation,
+            "senses": dataclasses.asdict(self.params.senses),
             "rng": self.rng.bit_generator.state,
             "step": self.step_count,
             "overlap_total": self.overlap_total,
@@ -215,7 +217,15 @@ class Swarm:
             raise saved.error("max_speed", f"and max_accel are not valid ({error})") from None
         wander_rate = saved.number("wander_rate", 0, 1)
         patience = saved.integer("patience", 1, 10**6)
-        params = Params(limits, wander_rate, patience, saved.number("speed_variation", 0, 0.9))
+        senses = saved.value("senses")
+        if not isinstance(senses, dict) or set(senses) != {"radius", "distance_noise", "msg_loss"}:
+            raise saved.error("senses", "is not a sensing radius, distance noise and message loss")
+        try:
+            senses = Senses(**senses)
+        except InputError as error:
+            raise saved.error("senses", f"are not valid ({error})") from None
+        speed_variation = saved.number("speed_variation", 0, 0.9)
+        params = Params(limits, senses, wander_rate, patience, speed_variation)
         swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
         swarm._restore_arrays(saved)
         swarm._restore_rng(saved)

@@ -43,6 +43,8 @@ class Layout:
     """``K``: neighbour slots per robot."""
     message_size: int
     """Integers per broadcast."""
+    radius: float
+    """The sensing radius the slots were filled from (a program's `Perception.radius`)."""
 
     @property
     def slot_size(self) -> int:
@@ -127,4 +129,5 @@ def perception_of(obs: np.ndarray, layout: Layout, blueprint: Blueprint) -> Perc
         seed_frame=whole[:, FRAME_X : FRAME_Y + 1],
         blueprint=blueprint,
         step=int(own[0, STEP]) if len(obs) else 0,
+        radius=layout.radius,
     )

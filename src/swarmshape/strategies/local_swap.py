@@ -176,15 +176,15 @@ class LocalSwap(Program):
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
         seeking = memory.localised & ~memory.has_goal
-        sight, open_cell, by_shape = _open_in_sight(sense, memory, self.senses.radius)
-        news, news_hops = _relay_open(sense, memory, self.senses.radius, sight, open_cell)
+        sight, open_cell, by_shape = _open_in_sight(sense, memory, sense.radius)
+        news, news_hops = _relay_open(sense, memory, sense.radius, sight, open_cell)
         target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
         unaware = seeking & (news_hops >= FAR) & ~open_cell
         memory.unaware = np.where(unaware, memory.unaware + 1, 0)
         searching = by_shape & sense.ready & (memory.unaware > SEARCH_AFTER)
         unaware = np.flatnonzero(unaware & (~by_shape | searching))
         target[unaware] = _search_target(
-            sense, memory, unaware, searching[unaware], self.senses.radius, rng
+            sense, memory, unaware, searching[unaware], sense.radius, rng
         )
         here = _same(target, memory.frame)
         resting = memory.has_goal & _same(memory.goal, memory.frame)
@@ -203,14 +203,14 @@ class LocalSwap(Program):
         going = (has_goal | seeking) & ~_same(memory.frame, target)
         same_aim = _same(target, memory.aim)
         _note_progress(memory, target)
-        waypoint = _route(sense, memory, target, going & sense.ready, same_aim, self.senses.radius)
+        waypoint = _route(sense, memory, target, going & sense.ready, same_aim, sense.radius)
         arrived = ~_same(sense.moved, STEPS[0])
         back = -sense.moved[arrived]
         memory.came[arrived] = DIRECTION_OF[back[:, 0] + 1, back[:, 1] + 1]
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
         delta = waypoint - memory.frame
-        preferred, first = _plan(sense, delta, behind, going, self.senses.radius)
+        preferred, first = _plan(sense, delta, behind, going, sense.radius)
         memory.wants = _choose_partner(
             sense, memory, preferred, target, seeking, news, news_hops, rested, silent
         )

@@ -14,7 +14,7 @@ alone, and `stopped`, for one that walked round everything without finding a pla
   estimate between fixes;
 - **leaving one at a time**: a waiting robot starts to move only when no moving robot is within
   sensing range and its gradient is greater than every non-joined neighbour's (ties: the higher
-  ID); a robot that has lately missed messages waits for that `LOSSY_PATIENCE` steps in a row
+  ID); a robot that has lately missed messages waits for that ``lossy_patience`` steps in a row
   (so a lost message rarely lets it go beside a mover), others at once;
 - **edge-following**: a right-hand wall follower around the stationary robots (turn right,
   straight, left, back; the next cell must touch a stationary robot), waiting behind a moving
@@ -29,12 +29,14 @@ and position warp the shape more the farther it grows from the seeds.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from scipy import ndimage
 
 from swarmshape.core.local import Memory, Program, Slot
+from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
 
@@ -51,20 +53,9 @@ FIXED = 1024
 INFINITE = 1 << 30
 """The gradient of a robot connected to no seed."""
 
-STARTUP = 4
-"""Steps a robot only listens before it may act."""
-PATIENCE = 1
-"""Steps in a row a waiting robot must find itself first in line before it leaves, when every
-neighbour's message arrives: one, since a robot that left is heard moving the next step."""
-LOSSY_PATIENCE = 8
-"""The same for a robot that has lately missed a neighbour's message: a moving neighbour must
-go unheard this many steps in a row before the robot trusts that none is near (at 10% loss,
-three lost messages in a row happen often enough in a run to let a robot leave beside a
-mover, pull the wall from under it, and leave two followers nose to nose for good)."""
-LOSS_MEMORY = 20
-"""Steps a robot remembers that it missed a neighbour's message."""
-ALONE = 150
-"""Steps a waiting robot with no gradient waits before it walks off at random to find one."""
+NEVER = 1 << 30
+"""Steps since a robot last missed a message, for one that never has."""
+
 
 # The 5x5 window around a robot, row-major over dy then dx, each -2..2; slot 12 is its own cell.
 WINDOW = np.array([(dx, dy) for dy in range(-2, 3) for dx in range(-2, 3)], dtype=np.int64)
@@ -105,6 +96,34 @@ class SelfAssembly(Program):
     states = STATES
     grows_from_seeds = True
     shown = "gradient"
+
+    @dataclass(frozen=True)
+    class Options:
+        startup: int = option(4, "steps a robot only listens before it may act", at_least=0)
+        patience: int = option(
+            1,
+            "steps in a row a waiting robot must find itself first in line before it leaves, "
+            "when every neighbour's message arrives (a robot that left is heard moving the "
+            "next step)",
+            at_least=1,
+        )
+        lossy_patience: int = option(
+            8,
+            "the same for a robot that has lately missed a neighbour's message: a moving "
+            "neighbour must go unheard this many steps in a row before it trusts that none is "
+            "near (at 10 % loss three lost messages in a row let a robot leave beside a mover)",
+            at_least=1,
+        )
+        loss_memory: int = option(
+            20, "steps a robot remembers that it missed a neighbour's message", at_least=0
+        )
+        alone: int = option(
+            150,
+            "steps a waiting robot with no gradient waits before it walks off at random to "
+            "find one",
+            at_least=0,
+        )
+
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
         "gradient": Slot(np.int64, INFINITE),
@@ -113,7 +132,7 @@ class SelfAssembly(Program):
         "heading": Slot(np.int64, 0),
         "age": Slot(np.int64, 0),
         "eligible": Slot(np.int64, 0),
-        "since_loss": Slot(np.int64, LOSS_MEMORY),
+        "since_loss": Slot(np.int64, NEVER),
         "travelled": Slot(np.int64, 0),
         "want": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
@@ -127,7 +146,7 @@ class SelfAssembly(Program):
         memory.age += 1
         _odometry(sense, memory, moved)
         state = memory.state
-        state[(state == START) & (memory.age > STARTUP)] = WAIT
+        state[(state == START) & (memory.age > self.options.startup)] = WAIT
         near = _Near(sense)
         rows = _busy(near, memory)
         _settled_gradient(near, memory, rows)
@@ -138,7 +157,7 @@ class SelfAssembly(Program):
             mine = _Rows(memory, rows)
             moved_rows = np.zeros(len(rows), dtype=np.int64)
             _gradient(view, mine)
-            _leave(view, mine, moved_rows, rng)
+            _leave(view, mine, self.options)
             _follow(view, _Where(sense, rows), mine, moved_rows)
             _wander(view, mine, moved_rows, rng)
             mine.write_back()
@@ -389,22 +408,23 @@ def _frame_cell(memory: Memory) -> np.ndarray:
     return np.rint(memory.position).astype(np.int64)
 
 
-def _leave(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
-    """Waiting robots with a gradient leave one at a time; those without one for `ALONE`
-    steps, or with no neighbour at all, walk off to find the structure."""
+def _leave(view: _View, memory: Memory, options: SelfAssembly.Options) -> None:
+    """Waiting robots with a gradient leave one at a time; those without one for
+    ``options.alone`` steps, or with no neighbour at all, walk off to find the structure."""
     state = memory.state
     waiting = state == WAIT
     first = waiting & (memory.gradient < INFINITE) & ~view.outranked & ~view.mover_near
     heading = _first_heading(view)
     first &= heading > 0
     memory.eligible = np.where(first, memory.eligible + 1, 0)
-    patience = np.where(memory.since_loss < LOSS_MEMORY, LOSSY_PATIENCE, PATIENCE)
+    lossy = memory.since_loss < options.loss_memory
+    patience = np.where(lossy, options.lossy_patience, options.patience)
     go = first & (memory.eligible >= patience) & view.ready
     state[go] = OUTSIDE
     memory.heading[go] = heading[go]
     memory.travelled[go] = 0
     lonely = waiting & (memory.gradient >= INFINITE)
-    lonely &= (memory.age > ALONE) | ~view.taken[:, NEAR8].any(axis=1)
+    lonely &= (memory.age > options.alone) | ~view.taken[:, NEAR8].any(axis=1)
     state[lonely] = WANDER
 
 
