@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmshape.core.local import Memory, Program, ProgramError, Slot, _link_up
+from swarmshape.core.local import Memory, Program, ProgramError, Schema, Slot, _link_up
 from swarmshape.core.perception import Perception, Senses, neighbours
 from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.swarm import Params, Swarm
@@ -160,3 +160,14 @@ def test_a_translated_scenario_runs_the_same_translated(dx, dy, turns, seed, noi
             trail.append(np.column_stack([swarm.cell - shift, swarm.direction, swarm.offset]))
         runs.append(np.array(trail))
     assert np.array_equal(runs[0], runs[1])
+
+
+def test_a_message_schema_packs_and_reads_fields_by_name():
+    schema = Schema(state=1, position=2, hops=1)
+    assert len(schema) == 4
+    message = schema.pack(state=[1, 2], position=[[3, 4], [5, 6]], hops=np.array([7, 8]))
+    assert message.dtype == np.int64 and message.tolist() == [[1, 3, 4, 7], [2, 5, 6, 8]]
+    fields = schema.read(message)
+    assert fields.state.tolist() == [1, 2] and fields.position.tolist() == [[3, 4], [5, 6]]
+    with pytest.raises(TypeError, match="exactly the fields state, position, hops"):
+        schema.pack(state=[1], position=[[0, 0]])

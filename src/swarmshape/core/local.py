@@ -18,11 +18,12 @@ and does not act. Arrays keep one row per robot throughout, so a program's memor
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from swarmshape.core.motion import STEPS
+from swarmshape.core.motion import RIGHT, STEPS
 from swarmshape.core.perception import (
     Blueprint,
     Perception,
@@ -32,7 +33,7 @@ from swarmshape.core.perception import (
 )
 from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot
-from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING
+from swarmshape.core.states import STALLED
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
@@ -51,6 +52,40 @@ class Slot:
     dtype: type
     fill: Any = 0
     width: int | None = None
+
+
+class Schema:
+    """What a program broadcasts, as named fields declared once, each one or more integers
+    wide: ``Schema(state=1, position=2)``. `pack` lays a message out from its fields by name,
+    `read` gives the fields of messages heard (views, a field of width 1 as a vector)."""
+
+    def __init__(self, **widths: int) -> None:
+        self.widths = widths
+        ends = np.cumsum(list(widths.values()))
+        self.slices = {
+            name: slice(int(end) - width, int(end))
+            for (name, width), end in zip(widths.items(), ends, strict=True)
+        }
+
+    def __len__(self) -> int:
+        return sum(self.widths.values())
+
+    def pack(self, **fields: np.ndarray) -> np.ndarray:
+        """A message per robot ``(n, len(self))`` from every field, by name."""
+        if set(fields) != set(self.widths):
+            raise TypeError(f"a message has exactly the fields {', '.join(self.widths)}")
+        n = len(next(iter(fields.values())))
+        columns = [np.asarray(fields[name]).reshape(n, w) for name, w in self.widths.items()]
+        return np.concatenate(columns, axis=1).astype(np.int64)
+
+    def read(self, message: np.ndarray) -> SimpleNamespace:
+        """The fields of messages ``(m, len(self))``, by name."""
+        return SimpleNamespace(
+            **{
+                name: message[:, part.start] if self.widths[name] == 1 else message[:, part]
+                for name, part in self.slices.items()
+            }
+        )
 
 
 class Memory:
@@ -273,19 +308,14 @@ class LocalControl:
         self._note_filled()
 
     def _note_filled(self) -> None:
-        """Robots the program calls finished and that rest on a target of their group are
-        settled (a shape change can leave a finished robot off the new shape; it is not settled
-        there), those under way are moving; a target is filled while a settled robot is on it."""
+        """Robots the program calls finished that rest on a target of their group are settled
+        (a shape change can leave a finished robot off the new shape; it is not settled
+        there); the swarm fills the targets they rest on."""
         swarm = self.swarm
         at = swarm.target_at[swarm.cell[:, 0], swarm.cell[:, 1]]
         on_target = (at >= 0) & (swarm.world.target_group[np.maximum(at, 0)] == swarm.group)
-        working = (swarm.state != LOST) & (swarm.state != STALLED)
-        swarm.state[working] = np.where(swarm.ahead[working] > 0, MOVING, WAITING)
         finished = self.program.finished(self.memory) & (swarm.ahead == 0) & on_target
-        swarm.state[working & finished] = SETTLED
-        settled = swarm.state == SETTLED
-        swarm.filled[:] = False
-        swarm.filled[at[settled]] = True
+        swarm.settle_exactly(finished)
 
     def completed(self, group: int) -> None:
         """Nothing to hand over: the program keeps running as it is."""
@@ -330,7 +360,7 @@ class LocalControl:
 def _turned_directions() -> np.ndarray:
     """``[turns, direction]``: the `STEPS` index of a direction turned by quarter turns."""
     table = np.zeros((4, len(STEPS)), dtype=np.int64)
-    for turns in range(4):
-        turned = turn(STEPS, np.full(len(STEPS), turns))
-        table[turns] = [np.flatnonzero((step == STEPS).all(axis=1))[0] for step in turned]
+    table[0] = np.arange(len(STEPS))
+    for turns in range(1, 4):
+        table[turns] = RIGHT[table[turns - 1]]
     return table

@@ -17,7 +17,16 @@ from swarmshape.core.options import checked, option
 from swarmshape.errors import SettingError
 
 STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
-"""Direction index -> unit step; index 0 means "no direction"."""
+"""Direction index -> unit step (0 none, 1 east, 2 west, 3 south, 4 north; y down)."""
+REVERSE = np.array([0, 2, 1, 4, 3])
+"""The opposite of each direction index."""
+RIGHT = np.array([0, 3, 4, 2, 1])
+"""Each direction turned a quarter clockwise on screen: east -> south -> west -> north."""
+LEFT = RIGHT[RIGHT[RIGHT]]
+"""Each direction turned a quarter anticlockwise on screen."""
+DIRECTION_OF = np.zeros((3, 3), dtype=np.int64)
+DIRECTION_OF[STEPS[:, 0] + 1, STEPS[:, 1] + 1] = np.arange(len(STEPS))
+"""The direction index of each unit step ``(dx, dy)``, at ``[dx + 1, dy + 1]``."""
 
 SLOWEST = 0.001
 """Smallest speed and acceleration limit: a thousand steps a cell. Far smaller ones would only

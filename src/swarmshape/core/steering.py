@@ -247,10 +247,7 @@ class Steering:
         if ((state == LOST) | (state == STALLED)).any():
             working = (state != LOST) & (state != STALLED)
             robots, targets = robots[working], np.broadcast_to(targets, robots.shape)[working]
-            state = state[working]
-        moving_on = robots[(state == SETTLED) & (self.target[robots] >= 0)]
-        self.swarm.filled[self.target[moving_on]] = False
-        self.swarm.state[robots] = MOVING
+        self.swarm.dispatch(robots)
         self.target[robots] = targets
         self.blocked[robots] = 0
         self.routed[robots] = self.motion is Motion.ROUTE
@@ -258,7 +255,7 @@ class Steering:
         self.planner.forget(robots)
 
     def release(self, robots: np.ndarray) -> None:
-        self.swarm.state[robots] = WANDERING
+        self.swarm.release(robots)
         self.target[robots] = -1
         self.planner.forget(robots)
 
@@ -327,8 +324,7 @@ class Steering:
         candidates = np.flatnonzero((swarm.state == MOVING) & (swarm.ahead == 0))
         goals = swarm.world.targets[self.target[candidates]]
         done = candidates[(swarm.cell[candidates] == goals).all(axis=1)]
-        swarm.state[done] = SETTLED
-        swarm.filled[self.target[done]] = True
+        swarm.settle(done)
         self.routed[done] = False  # the way it went round something is behind it
         self.planner.forget(done)
         if len(done):
@@ -344,7 +340,6 @@ class Steering:
         has_target = self.target >= 0
         self.target[has_target] = renumber[self.target[has_target]]
         self.release(np.flatnonzero(has_target & (self.target < 0)))
-        self.swarm.filled[self.target[self.swarm.state == SETTLED]] = True
 
     def removed(self, robots: np.ndarray, stalled: bool) -> None:
         """A fault took `robots`: forget their targets, paths and messages; robots heading for a
@@ -358,7 +353,7 @@ class Steering:
         self.queue.drop(robots)
         heading = np.flatnonzero(self.target >= 0)
         doomed = heading[swarm.dead[self.target[heading]]]
-        swarm.state[doomed] = WAITING
+        swarm.wait(doomed)
         self.target[doomed] = -1
         self.planner.forget(doomed)
         if stalled:  # everyone plans afresh around the new obstacles
@@ -514,9 +509,7 @@ class Steering:
 
     def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
         """The settled robot takes the mover's target and moves on; the mover takes its cell."""
-        swarm = self.swarm
-        swarm.filled[self.target[settled]] = False
-        swarm.state[settled] = MOVING
+        self.swarm.dispatch(settled)
         both = np.concatenate([movers, settled])
         self._pass_targets(both, np.concatenate([settled, movers]))
         # the pushed robot goes on round what the mover was going round (a settled robot has

@@ -23,7 +23,7 @@ from swarmshape.core.motion import STEPS, TOUCH, Limits, positions, resolve_clai
 from swarmshape.core.options import option, spec_of
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
-from swarmshape.core.states import LOST, SETTLED, STALLED, WAITING, State
+from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING, State
 from swarmshape.core.world import World, WorldError
 from swarmshape.errors import InputError
 
@@ -82,7 +82,7 @@ class Driver(Protocol):
         """Every target of `group` is filled."""
 
     def reshaped(self, renumber: np.ndarray) -> None:
-        """The targets were renumbered after a shape change (-1: gone); mark `Swarm.filled`."""
+        """The targets were renumbered after a shape change (-1: gone)."""
 
     def removed(self, robots: np.ndarray, stalled: bool) -> None:
         """A fault struck `robots`: they no longer act. Without `stalled` they are gone (state
@@ -305,6 +305,48 @@ class Swarm:
         self.dead = self._find_dead()
         self.driver.index_world()
 
+    # --- the robots' states: drivers say what happened, only the swarm writes it ---------------
+
+    def settle(self, robots: np.ndarray) -> None:
+        """`robots` rest on targets of their own group and settle: those targets are filled."""
+        self.state[robots] = SETTLED
+        self.filled[self._target_under(robots)] = True
+
+    def dispatch(self, robots: np.ndarray) -> None:
+        """`robots` set off for a target; a settled one leaves its target open."""
+        settled = robots[self.state[robots] == SETTLED]
+        under = self._target_under(settled)
+        self.filled[under[under >= 0]] = False
+        self.state[robots] = MOVING
+
+    def release(self, robots: np.ndarray) -> None:
+        """`robots` have nothing left to do and wander."""
+        self.state[robots] = WANDERING
+
+    def wait(self, robots: np.ndarray) -> None:
+        """`robots` wait for a target."""
+        self.state[robots] = WAITING
+
+    def settle_exactly(self, settled: np.ndarray) -> None:
+        """Exactly the robots of the mask `settled` are settled (a local program says so anew
+        each step); the others that can act are moving if under way, else waiting."""
+        working = self._mobile()
+        self.state[working] = np.where(self.ahead[working] > 0, MOVING, WAITING)
+        self.state[working & settled] = SETTLED
+        self._refill()
+
+    def _refill(self) -> None:
+        """A target is filled while a settled robot of its group rests on it."""
+        self.filled[:] = False
+        under = self._target_under(np.flatnonzero(self.state == SETTLED))
+        self.filled[under[under >= 0]] = True
+
+    def _target_under(self, robots: np.ndarray) -> np.ndarray:
+        """The target of its own group each robot rests on, or -1."""
+        at = self.target_at[self.cell[robots, 0], self.cell[robots, 1]]
+        mine = (at >= 0) & (self.world.target_group[np.maximum(at, 0)] == self.group[robots])
+        return np.where(mine, at, -1)
+
     # --- reading the run ------------------------------------------------------------------------
 
     @property
@@ -487,6 +529,7 @@ class Swarm:
         self.lattice.grid[old.mask(old.seeds)] = FREE
         self.world = new
         self._index_world()
+        self._refill()
         self.completed_at[group] = None
         self.driver.hand_out(group)
 

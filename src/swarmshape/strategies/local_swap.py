@@ -19,7 +19,7 @@ import numpy as np
 from scipy import ndimage
 
 from swarmshape.core.local import Memory, Program, Slot
-from swarmshape.core.motion import STEPS
+from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
 from swarmshape.core.perception import Blueprint, Perception, box_lookup
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
@@ -105,13 +105,6 @@ TABU = 10
 """Steps two robots that traded do not trade with each other again: a robot pushed out of
 its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
 straight back from the one that pushed it, by the distance rule."""
-
-REVERSE = np.array([0, 2, 1, 4, 3])
-"""The opposite of each direction index."""
-
-DIRECTION_OF = np.zeros((3, 3), dtype=np.int64)
-DIRECTION_OF[STEPS[:, 0] + 1, STEPS[:, 1] + 1] = np.arange(len(STEPS))
-"""The direction index of each unit step ``(dx, dy)``, at ``[dx + 1, dy + 1]``."""
 
 BIG = 1 << 40
 """Farther than any cell."""

@@ -35,7 +35,8 @@ from typing import ClassVar
 import numpy as np
 from scipy import ndimage
 
-from swarmshape.core.local import Memory, Program, Slot
+from swarmshape.core.local import Memory, Program, Schema, Slot
+from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
@@ -44,10 +45,10 @@ START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
 STATIONARY = (START, WAIT, JOINED, STOPPED)
 
-STATE, GRADIENT, LOCALISED, X, Y, NUMBER, WANT = range(7)
-"""What a robot broadcasts, in order: its state plus one (0 is a robot that has not spoken
-yet), gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID, and
-the direction a blocked follower waits to move in (0 if none)."""
+MESSAGE = Schema(state=1, gradient=1, localised=1, position=2, number=1, want=1)
+"""What a robot broadcasts: its state plus one (0 is a robot that has not spoken yet),
+gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID, and the
+direction a blocked follower waits to move in (0 if none)."""
 
 FIXED = 1024
 INFINITE = 1 << 30
@@ -60,12 +61,6 @@ NEVER = 1 << 30
 # The 5x5 window around a robot, row-major over dy then dx, each -2..2; slot 12 is its own cell.
 WINDOW = np.array([(dx, dy) for dy in range(-2, 3) for dx in range(-2, 3)], dtype=np.int64)
 SELF = 12
-DIRECTION = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
-"""Move index -> unit step (the order of `swarmshape.core.motion.STEPS`)."""
-RIGHT = np.array([0, 3, 4, 2, 1])
-"""The direction a quarter turn clockwise on screen (y down): east -> south -> west -> north."""
-LEFT = np.array([0, 4, 3, 1, 2])
-BACK = np.array([0, 2, 1, 4, 3])
 
 
 def _slot(step: np.ndarray) -> np.ndarray:
@@ -73,7 +68,7 @@ def _slot(step: np.ndarray) -> np.ndarray:
     return (step[..., 1] + 2) * 5 + (step[..., 0] + 2)
 
 
-AROUND = np.array([[_slot(DIRECTION[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 7, 8, 11, 13, 16,
+AROUND = np.array([[_slot(STEPS[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 7, 8, 11, 13, 16,
                    17, 18)] for d in range(5)])  # fmt: skip
 """``[d]``: the window slots of the 8 cells around the cell one step in direction d (the
 robot's own cell among them for d > 0)."""
@@ -92,7 +87,7 @@ SIDES_IN_A_WINDOW = np.stack([np.zeros((3, 3), bool), ndimage.generate_binary_st
 class SelfAssembly(Program):
     name = "self-assembly"
     description = "gradient, localisation and edge-following (Rubenstein, Cornejo & Nagpal 2014)"
-    message_size = 7
+    message_size = len(MESSAGE)
     states = STATES
     grows_from_seeds = True
     shown = "gradient"
@@ -162,17 +157,14 @@ class SelfAssembly(Program):
             _wander(view, mine, moved_rows, rng)
             mine.write_back()
             moves[rows] = moved_rows
-        position = np.rint(memory.position * FIXED).astype(np.int64)
-        messages = np.column_stack(
-            [
-                memory.state + 1,
-                memory.gradient,
-                memory.localised,
-                position,
-                sense.number,
-                memory.want,
-            ]
-        ).astype(np.int64)
+        messages = MESSAGE.pack(
+            state=memory.state + 1,
+            gradient=memory.gradient,
+            localised=memory.localised,
+            position=np.rint(memory.position * FIXED),
+            number=sense.number,
+            want=memory.want,
+        )
         return moves, messages
 
     def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
@@ -198,19 +190,19 @@ class _Near:
         self.slot = (self.cy + 2) * 5 + (self.cx + 2)
         self.kin = sense.kin[e]
         self.seed = sense.seed[e] & self.kin  # another group's seeds are only obstacles
-        said = np.take(sense.message, e, axis=0)  # see `LocalControl.perceive` (1)
-        state = said[:, STATE] - 1
+        said = MESSAGE.read(np.take(sense.message, e, axis=0))  # `LocalControl.perceive` (1)
+        state = said.state - 1
         self.spoke = sense.heard[e] & self.kin & ~self.seed & (state >= 0)
         self.state = state
         self.stays = (state <= WAIT) | (state >= JOINED)
-        self.gradient = np.minimum(said[:, GRADIENT], INFINITE)
+        self.gradient = np.minimum(said.gradient, INFINITE)
         n = len(sense)
         touching = TOUCHING[self.slot]
         self.crowded = np.bincount(self.me[touching], minlength=n) >= 8
-        want = said[:, WANT]
+        want = said.want
         # a moving neighbour that waits to step into the robot's own cell
-        asking = np.flatnonzero(self.spoke & ~self.stays & (want > 0) & (want < len(DIRECTION)))
-        aim = DIRECTION[want[asking]]
+        asking = np.flatnonzero(self.spoke & ~self.stays & (want > 0) & (want < len(STEPS)))
+        aim = STEPS[want[asking]]
         self.facing = np.zeros(len(e), dtype=bool)
         self.facing[asking] = (self.cx[asking] == -aim[:, 0]) & (self.cy[asking] == -aim[:, 1])
         unheard = ~sense.heard & sense.kin & ~sense.seed
@@ -291,15 +283,16 @@ class _View:
         pick = np.flatnonzero(index[sense.owner] >= 0)
         me = index[sense.owner[pick]]
         seed = sense.seed[pick]
-        state = sense.message[pick, STATE] - 1
+        said = MESSAGE.read(sense.message)
+        state = said.state[pick] - 1
         spoke = sense.heard[pick] & sense.kin[pick] & ~seed & (state >= 0)
         stays = (state <= WAIT) | (state >= JOINED)
         self.mover_near = np.zeros(a, dtype=bool)
         self.mover_near[me[spoke & ~stays]] = True
-        gradient = np.minimum(sense.message[pick, GRADIENT], INFINITE)
+        gradient = np.minimum(said.gradient[pick], INFINITE)
         mine = memory.gradient[rows][me]
         ahead = spoke & (state <= WAIT) & (gradient >= mine)
-        ahead &= (gradient > mine) | (sense.message[pick, NUMBER] > sense.number[rows][me])
+        ahead &= (gradient > mine) | (said.number[pick] > sense.number[rows][me])
         self.outranked = np.zeros(a, dtype=bool)
         self.outranked[me[ahead]] = True
         # the nearest seed or gradient-holding stationary robot heard (entries run nearest first)
@@ -360,7 +353,7 @@ def _odometry(sense: Perception, memory: Memory, moved: np.ndarray) -> None:
     """Dead reckoning: a localised robot adds the cells it moved; its heading is its last move."""
     memory.position[memory.localised] += sense.moved[memory.localised]
     for direction in range(1, 5):
-        went = (sense.moved == DIRECTION[direction]).all(axis=1)
+        went = (sense.moved == STEPS[direction]).all(axis=1)
         memory.heading[went] = direction
     memory.travelled[moved] += 1
 
@@ -380,15 +373,15 @@ def _localise(sense: Perception, memory: Memory) -> None:
     each reference's position less its sensed offset (two are needed for a first fix), and
     move a quarter of the way there (the paper's step); joined robots keep theirs."""
     n = len(sense)
-    msg = sense.message
-    robot = sense.heard & sense.kin & ~sense.seed & (msg[:, STATE] == JOINED + 1)
-    robot &= msg[:, LOCALISED] == 1
+    said = MESSAGE.read(sense.message)
+    robot = sense.heard & sense.kin & ~sense.seed & (said.state == JOINED + 1)
+    robot &= said.localised == 1
     seed = sense.heard & sense.kin & sense.seed
     open_owner = sense.ready & (memory.state != JOINED)
     use = np.flatnonzero((robot | seed) & open_owner[sense.owner])
     me = sense.owner[use]
     reference = np.where(
-        seed[use, None], sense.seed_frame[use].astype(np.float64), msg[use, X : Y + 1] / FIXED
+        seed[use, None], sense.seed_frame[use].astype(np.float64), said.position[use] / FIXED
     )
     estimate = reference - sense.offset[use]
     count = np.bincount(me, minlength=n)
@@ -435,11 +428,9 @@ def _first_heading(view: _View) -> np.ndarray:
     heading = np.zeros(n, dtype=np.int64)
     for pick in ("side", "corner"):
         for d in (1, 3, 2, 4):
-            ahead = _slot(DIRECTION[d])
-            if pick == "side":
-                wall = _slot(DIRECTION[RIGHT[d]])
-            else:
-                wall = _slot(DIRECTION[d] + DIRECTION[RIGHT[d]])
+            ahead = _slot(STEPS[d])
+            side = STEPS[RIGHT[d]]
+            wall = _slot(side if pick == "side" else STEPS[d] + side)
             fits = (heading == 0) & ~view.taken[:, ahead] & view.stationary[:, wall]
             heading[fits] = d
     return heading
@@ -458,9 +449,9 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     choice = np.zeros(n, dtype=np.int64)
     way = np.zeros(n, dtype=np.int64)  # the same, passing by a follower that faces this one
     heading = np.where(memory.heading > 0, memory.heading, 1)
-    for turn in (RIGHT, np.arange(5), LEFT, BACK):
+    for turn in (RIGHT, np.arange(5), LEFT, REVERSE):
         d = turn[heading]
-        target = _slot(DIRECTION[d])
+        target = _slot(STEPS[d])
         wall = view.stationary[rows, target]
         contact = view.stationary[rows[:, None], AROUND[d]].any(axis=1)
         fits = (choice == 0) & ~wall & contact
@@ -474,13 +465,13 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     mine = np.where(least >= INFINITE, INFINITE, least + 1)
     layer_end = (view.joined[:, four] & (view.gradient[:, four] >= mine[:, None])).any(axis=1)
     layer_end &= mine < INFINITE
-    next_cell = cell + DIRECTION[choice]
+    next_cell = cell + STEPS[choice]
     leaves = ~sense.blueprint.contains(sense.group, next_cell) | (choice == 0)
     # never seal a pocket of the shape: step into it instead (see `_pocket`)
     stopping = np.flatnonzero(inside & (layer_end | leaves))
     sealed = np.zeros(len(choice), dtype=np.int64)
     for d in range(1, 5):
-        beside = cell[stopping] + DIRECTION[d]
+        beside = cell[stopping] + STEPS[d]
         pocket = _pocket(view.stationary[stopping], d)
         pocket &= sense.blueprint.contains(sense.group[stopping], beside)
         sealed[stopping[(sealed[stopping] == 0) & pocket]] = d
@@ -488,7 +479,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     way = np.where(sealed > 0, sealed, way)
     state[join] = JOINED
     memory.gradient[join] = mine[join]
-    blocked = view.taken[rows, _slot(DIRECTION[way])]
+    blocked = view.taken[rows, _slot(STEPS[way])]
     step = going & ~join & (way > 0) & ~blocked
     moves[step] = way[step]
     memory.want = np.where(going & ~join & (way > 0) & blocked, way, 0)
@@ -516,7 +507,7 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     free = ~stationary.reshape(a, 5, 5)
     free[:, 2, 2] = False
     start = np.zeros((a, 5, 5), dtype=bool)
-    start[:, 2 + DIRECTION[d, 1], 2 + DIRECTION[d, 0]] = True
+    start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
     reach = ndimage.binary_propagation(start & free, structure=SIDES_IN_A_WINDOW, mask=free)
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
@@ -534,7 +525,7 @@ def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Gener
     noise[:, 3] += 2.0 * (by > 0) + (np.abs(by) > np.abs(bx)) * (by > 0)
     noise[:, 4] += 2.0 * (by < 0) + (np.abs(by) > np.abs(bx)) * (by < 0)
     for d in range(1, 5):
-        noise[view.taken[:, _slot(DIRECTION[d])], d] = -1.0
+        noise[view.taken[:, _slot(STEPS[d])], d] = -1.0
     choice = noise.argmax(axis=1)
     walking &= noise.max(axis=1) > 0.5
     moves[walking] = choice[walking]
