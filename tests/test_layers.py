@@ -28,7 +28,7 @@ ALLOWED = {
     # the learning environment draws with the window's renderer, loaded only to render
     "env": {"numpy", "gymnasium", "pettingzoo", "pygame", "swarmshape.core",
             "swarmshape.errors", "swarmshape.io", "swarmshape.env", "swarmshape.runs",
-            "swarmshape.config", "swarmshape.ui.render"},
+            "swarmshape.config", "swarmshape.ui.screen"},
 }  # fmt: skip
 
 

@@ -34,11 +34,12 @@ from swarmshape.env.observe import (
 )
 from swarmshape.env.relay import NAME, Relay, RelayControl
 from swarmshape.env.rewards import CoverageShare, Reward
-from swarmshape.env.screen import Screen
 from swarmshape.errors import InputError
 from swarmshape.io.scenario import PALETTE, parse_colour, read_start_cells
 from swarmshape.runs import load_world, start_swarm
 
+FPS = 30
+RENDER_MODES = ("human", "rgb_array")
 EPISODE_STEPS = 1_000
 """An episode's step limit unless ``max_steps`` is given (the command line's 500,000 is a
 whole run's)."""
@@ -225,9 +226,17 @@ class Host:
         render_size: tuple[int, int] = (640, 400),
         **options: Any,
     ) -> None:
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(
+                f"render_mode must be one of {RENDER_MODES} or None, got {render_mode!r}"
+            )
         self.episode = Episode(shape, **options)
-        self.screen = Screen(render_mode, render_size)
         self.render_mode = render_mode
+        self.screen = None
+        if render_mode is not None:
+            from swarmshape.ui.screen import Screen  # pygame, only to render
+
+            self.screen = Screen(render_mode, render_size, FPS)
 
     @property
     def layout(self) -> Layout:
@@ -240,7 +249,16 @@ class Host:
         return self.episode.blueprint
 
     def render(self) -> np.ndarray | None:
-        return self.screen.render(self.episode.swarm)
+        return None if self.screen is None else self.screen.render(self.episode.swarm)
+
+    def show(self) -> None:
+        """After a reset or a step: a window follows the swarm."""
+        if self.screen is not None:
+            self.screen.update(self.episode.swarm)
+
+    def close(self) -> None:
+        if self.screen is not None:
+            self.screen.close()
 
     def coverage(self) -> float:
         """Filled target cells over target cells, now."""
