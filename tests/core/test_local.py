@@ -82,6 +82,36 @@ def test_a_move_into_a_taken_cell_does_not_happen_and_odometry_says_so():
     assert (swarm.driver.memory.went == swarm.cell[:, 0] - start[:, 0]).all()
 
 
+class EastThenSouth(Program):
+    """East until the robot has gone (or is on its way to) 10 cells, then south: asked to
+    turn while under way, it must brake and stop first."""
+
+    name = "east-then-south"
+    description = "test: a turn"
+    memory: ClassVar[dict[str, Slot]] = {"went": Slot(np.int64, 0)}
+
+    def act(self, sense: Perception, memory: Memory, rng: np.random.Generator):
+        memory.went += np.abs(sense.moved).sum(axis=1)
+        committed = memory.went + (sense.heading > 0)  # the cell reserved ahead is coming
+        return np.where(committed < 10, 1, 3), np.zeros((len(sense), 0), dtype=np.int64)
+
+
+def test_a_robot_that_keeps_choosing_its_way_cruises_and_stops_only_to_turn():
+    world = world_of(np.ones((1, 1), dtype=bool), 1, arena=(40, 30))
+    swarm = Swarm(world, EastThenSouth(), seed=1, start=np.array([[6, 10]]))
+    stops, speeds = 0, []
+    for _ in range(60):
+        swarm.step()
+        speeds.append(float(swarm.speed[0]))
+        stops += swarm.ahead[0] == 0
+    assert swarm.cell[0, 0] == 16, "east ten cells, then only south"
+    top = swarm.params.limits.max_speed
+    east = speeds[: speeds.index(0.0)]
+    assert east.count(top) >= 14, "ten cells at top speed but for speeding up and braking"
+    assert 0.0 not in speeds[3 : len(east)], "no stop on the way east"
+    assert swarm.cell[0, 1] > 15 and swarm.overlap_total == 0
+
+
 def test_a_program_returning_nonsense_is_one_clear_error():
     class Wild(East):
         name = "wild"

@@ -25,6 +25,7 @@ from swarmshape.core.shape import Shape
 from swarmshape.core.states import LOST, STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.env.observe import OWN
 from swarmshape.errors import InputError
 from swarmshape.runs import Runner, start_swarm
 from swarmshape.strategies import create
@@ -171,13 +172,15 @@ def test_fewer_slots_keep_the_nearest_neighbours():
     few = learn.vector_env("shapes/star.png", cells=8, neighbours=2)
     a, _ = full.reset(seed=1)
     b, _ = few.reset(seed=1)
-    assert b.shape == (len(a), 6 + 2 * 8)
+    assert b.shape == (len(a), len(OWN) + 2 * 8)
     np.testing.assert_array_equal(b, a[:, : b.shape[1]])
 
 
 def towards_the_targets(env) -> dict[str, int]:
     """A policy that cheats (it reads the swarm): each robot steps down a distance field to the
-    open target cells, round the seeds. Enough to test what happens when the shape is formed."""
+    open target cells, round the seeds, from the cell it rests on or will rest on next (a robot
+    under way asked to go on straight does). Enough to test what happens when the shape is
+    formed."""
     swarm = env.episode.swarm
     world = swarm.world
     far = np.iinfo(np.int64).max // 2
@@ -192,7 +195,7 @@ def towards_the_targets(env) -> dict[str, int]:
         distance = np.where(blocked, far, np.minimum(distance, nearest + 1))
     moves = {}
     for index, agent in enumerate(env.agents):
-        cell = swarm.cell[index]
+        cell = swarm.cell[index] + STEPS[swarm.direction[index]] * swarm.ahead[index]
         ahead = cell + STEPS[1:]
         inside = ((ahead >= 0) & (ahead < world.size)).all(axis=1)
         value = np.where(inside, distance[tuple(np.clip(ahead, 0, np.array(world.size) - 1).T)],
@@ -315,7 +318,9 @@ def test_the_batched_interface_takes_one_array_per_step():
     assert vec.action_space.shape == (vec.num_envs, 4)
     layout = vec.episode.layout
     assert len(layout.names) == layout.size == obs.shape[1]
-    assert layout.names[:6] == ["ready", "moved_x", "moved_y", "number", "group", "step"]
+    assert layout.names[:8] == [
+        "ready", "cruising", "heading", "moved_x", "moved_y", "number", "group", "step"
+    ]  # fmt: skip
     assert (layout.slots(obs)[:, :, 0] <= 1).all()
 
 

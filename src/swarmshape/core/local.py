@@ -228,9 +228,12 @@ class LocalControl:
         changed = not np.array_equal(messages, self.broadcast)
         self.broadcast = messages
         self.sent += len(messages) if self.program.message_size else 0
-        robots = np.flatnonzero(sense.ready & (moves > 0))
+        # at rest a robot may start any way; under way it may only go on straight ahead
+        going = (moves > 0) & (sense.ready | (sense.cruising & (moves == sense.heading)))
+        robots = np.flatnonzero(going)
         directions = self.frame_directions[self.turns[swarm.group[robots]], moves[robots]]
-        keys = swarm.lattice.key(swarm.cell[robots])
+        ahead = swarm.ahead[robots, None]
+        keys = swarm.lattice.key(swarm.cell[robots] + STEPS[swarm.direction[robots]] * ahead)
         entering = keys + swarm.lattice.offsets[directions]
         allowed = swarm.enterable(entering, swarm.group[robots], directions)
         swarm.claim(robots[allowed], directions[allowed], keys[allowed])
@@ -273,12 +276,16 @@ class LocalControl:
         frames = np.concatenate([np.zeros((n, 2), dtype=np.int64), self.seed_frame])
         seed_frame = np.take(frames, other, axis=0)
         seed_frame[unheard] = 0
-        moved = turn(swarm.cell - self.last_cell, (-self.turns[swarm.group]) % 4)
+        back = (-self.turns[swarm.group]) % 4
+        moved = turn(swarm.cell - self.last_cell, back)
         self.last_cell = swarm.cell.copy()
+        acting = present & (swarm.state != STALLED)
         return Perception(
             number=self.number,
             group=swarm.group,
-            ready=(swarm.ahead == 0) & present & (swarm.state != STALLED),
+            ready=(swarm.ahead == 0) & acting,
+            heading=np.where(swarm.ahead > 0, self.frame_directions[back, swarm.direction], 0),
+            cruising=(swarm.ahead == 1) & acting,
             moved=moved,
             start=start,
             owner=owner,

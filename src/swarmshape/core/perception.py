@@ -116,7 +116,13 @@ class Perception:
     """Each robot's number in its group, 0 up: a unique ID it was built with."""
     group: np.ndarray
     ready: np.ndarray
-    """At rest on a cell centre: a move it asks for can start now (others are under way)."""
+    """At rest on a cell centre: a move it asks for, any way, starts now."""
+    heading: np.ndarray
+    """The direction it is moving in (a move index, seed-frame axes), 0 at rest."""
+    cruising: np.ndarray
+    """Under way with its next cell reserved and no further: a move straight on (`heading`)
+    asked for now goes on without braking. Asked for nothing, it brakes and stops on that cell
+    (it cannot turn while under way)."""
     moved: np.ndarray
     """Odometry: the whole cells each robot moved since the last step ``(n, 2)``."""
     start: np.ndarray

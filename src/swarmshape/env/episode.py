@@ -24,6 +24,7 @@ from swarmshape.env.observe import (
     FRAME_X,
     FRAME_Y,
     GROUP,
+    HEADING,
     MOVED_X,
     MOVED_Y,
     NUMBER,
@@ -118,6 +119,7 @@ class Episode:
         low, high = np.zeros(layout.size, np.float32), np.ones(layout.size, np.float32)
         own_low, own_high = layout.own(low), layout.own(high)
         own_low[MOVED_X : MOVED_Y + 1], own_high[MOVED_X : MOVED_Y + 1] = -2, 2
+        own_high[HEADING] = MOVES - 1
         # upper bounds of at least 1: a bound with low == high reads as a mistake to checkers
         own_high[NUMBER] = max(1, max(g.agents for g in world.groups) - 1)
         own_high[GROUP] = max(1, len(world.groups) - 1)

@@ -221,7 +221,8 @@ class LocalSwap(Program):
         moves[roaming] = _roam(sense, memory, occupied, roaming, rng)
         wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
         moves[wander] = _random_free(occupied[wander], rng)
-        memory.asked = np.where(sense.ready, moves, 0)
+        moves = np.where(sense.ready, moves, 0)  # it moves a cell at a time, from rest
+        memory.asked = moves
         stays = sense.ready & (moves == 0)
         messages = np.column_stack(
             [
