@@ -49,7 +49,7 @@ def main() -> None:
         fps=0,
     )
     while viewer.swarm.step_count < args.steps:
-        viewer.swarm.step()
+        viewer.step()
     viewer.paused = True
     viewer.overlays = set(args.overlay)
     viewer.tick()

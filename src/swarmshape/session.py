@@ -163,10 +163,7 @@ class Session:
             observers=observers,
             max_steps=config.max_steps,
         )
-        viewer.run()
-        if viewer.swarm is not None:
-            for observer in observers:
-                observer.close(viewer.swarm)
+        viewer.run()  # closes the observers, as `Runner.finish` does
         return viewer.swarm
 
 

@@ -6,8 +6,11 @@ import numpy as np
 import pygame
 import pytest
 
+from swarmshape.core.local import Program
 from swarmshape.core.states import LOST
 from swarmshape.core.swarm import Swarm
+from swarmshape.experiments.trace import Trace
+from swarmshape.runs import Observer, run
 from swarmshape.strategies import create
 from swarmshape.ui.viewer import SPEEDS, Viewer
 from tests.conftest import grid_from, make_swarm, world_of
@@ -18,17 +21,21 @@ SHAPE = grid_from("""
 """)
 
 
-@pytest.fixture
-def viewer(tmp_path):
-    view = Viewer(
-        lambda world: Swarm(world, create("paper"), 3),
+def window(plugin=lambda: create("paper"), **options) -> Viewer:
+    """A window on `SHAPE`, run by a fresh `plugin` with seed 3."""
+    return Viewer(
+        lambda world: Swarm(world, plugin(), 3),
         world_of(SHAPE),
         title="bar.png",
         size=(640, 400),
         fps=0,
-        screenshots=tmp_path,
+        **options,
     )
-    yield view
+
+
+@pytest.fixture
+def viewer(tmp_path):
+    yield window(screenshots=tmp_path)
     pygame.quit()
 
 
@@ -140,14 +147,7 @@ def test_a_paused_window_waits_for_events(viewer, monkeypatch):
 
 
 def test_the_window_stops_at_max_steps_and_keeps_the_final_swarm(tmp_path):
-    view = Viewer(
-        lambda world: Swarm(world, create("paper"), 3),
-        world_of(SHAPE),
-        title="bar.png",
-        size=(640, 400),
-        fps=0,
-        max_steps=5,
-    )
+    view = window(max_steps=5)
     assert "step 0/5" in view.status()
     for _ in range(4):
         view.tick()
@@ -228,14 +228,7 @@ def test_the_fault_tool_removes_a_clicked_robot_and_a_dragged_rectangle(tmp_path
 def test_g_l_o_toggle_a_local_programs_overlays_and_say_so(viewer, tmp_path):
     press(viewer, pygame.K_g)  # the fixture runs the central `paper` strategy
     assert viewer.overlays == set() and "no local program" in viewer.notice
-    view = Viewer(
-        lambda world: Swarm(world, Shown(), 3),
-        world_of(SHAPE),
-        title="bar.png",
-        size=(640, 400),
-        fps=0,
-        screenshots=tmp_path,
-    )
+    view = window(Shown, screenshots=tmp_path)
     try:
         for key in (pygame.K_g, pygame.K_l, pygame.K_o):
             press(view, key)
@@ -243,5 +236,64 @@ def test_g_l_o_toggle_a_local_programs_overlays_and_say_so(viewer, tmp_path):
         assert "showing error links values" in view.status()
         press(view, pygame.K_l)
         assert view.overlays == {"values", "error"} and view.notice == "links overlay off"
+    finally:
+        pygame.quit()
+
+
+# --- the window drives a runs.Runner -----------------------------------------------------
+
+
+def test_the_window_feeds_its_observers_as_a_headless_run_does(tmp_path):
+    """The same observers see the same steps, from the swarm before its first step to the
+    formed shape, and are closed when the window closes."""
+    view = window(observers=[Trace(tmp_path / "window.csv")])
+    while not view.idle:
+        view.tick()
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    view.run()
+    run(Swarm(world_of(SHAPE), create("paper"), 3), [Trace(tmp_path / "headless.csv")])
+    shown = (tmp_path / "window.csv").read_text()
+    assert shown == (tmp_path / "headless.csv").read_text()
+    assert shown.splitlines()[1].startswith("0,"), "the swarm before its first step"
+
+
+def test_a_window_that_fails_discards_its_observers_half_written_files(tmp_path):
+    class Breaks(Observer):
+        discarded = False
+
+        def capture(self, swarm: Swarm) -> None:
+            if swarm.step_count == 3:
+                raise RuntimeError("disk on fire")
+
+        def discard(self) -> None:
+            self.discarded = True
+
+    breaks = Breaks()
+    view = window(observers=[breaks])
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        view.run()
+    assert breaks.discarded
+
+
+class Still(Program):
+    """Robots that never move and always say the same: a program that goes quiet."""
+
+    name = "still"
+    message_size = 1
+
+    def act(self, sense, memory, rng):
+        return np.zeros(len(sense), dtype=np.int64), np.zeros((len(sense), 1), dtype=np.int64)
+
+
+def test_a_local_program_gone_quiet_leaves_the_window_idle_where_a_headless_run_stops():
+    view = window(Still)
+    try:
+        for _ in range(200):
+            if view.idle:
+                break
+            view.tick()
+        headless = run(Swarm(world_of(SHAPE), Still(), 3))
+        assert view.idle and view.swarm.step_count == headless.step_count
+        assert not view.swarm.complete
     finally:
         pygame.quit()

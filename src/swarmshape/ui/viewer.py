@@ -1,10 +1,12 @@
 """The window: main loop, keys, heads-up display, screenshots, and the editor on top.
 
-Each call of `Viewer.tick` handles pending events, advances the simulation by the current
-speed, and draws one frame, so tests can post events and drive it frame by frame under
-``SDL_VIDEODRIVER=dummy``. While nothing can change without the user (paused, formed with
-every robot at rest, no swarm yet) a tick waits for an event instead, and draws only if one
-came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
+The window drives a `runs.Runner`, the loop every run goes through: its observers (recorders,
+traces) see each step, it stops at its `max_steps`, and it says when the run is `finished`.
+Each call of `Viewer.tick` handles pending events, advances the run by the current speed, and
+draws one frame, so tests can post events and drive it frame by frame under
+``SDL_VIDEODRIVER=dummy``. While nothing can change without the user (paused, finished with
+every robot at rest, out of steps, no swarm yet) a tick waits for an event instead, and draws
+only if one came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
 running; Enter (or `e` again) hands the painted shape to the swarm, or starts one if none runs
 yet. `x` toggles the fault tool: a click removes the robot under the cursor, a drag removes
 every robot in the rectangle. Under a local program, robots take the colours of its states (a
@@ -27,6 +29,7 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write
+from swarmshape.runs import Observer, Runner
 from swarmshape.ui.editor import HELP_LINES, Canvas, Editor
 from swarmshape.ui.render import VALUE_MIN_CELL, Renderer, legend, program_of
 
@@ -76,7 +79,7 @@ class Viewer:
         speed: float = 8,
         fps: int = 60,
         screenshots: Path = Path(),
-        observers: Sequence = (),
+        observers: Sequence[Observer] = (),
         max_steps: int | None = None,
     ) -> None:
         pygame.display.init()  # not pygame.init(): no sound, so no audio device needed
@@ -87,15 +90,19 @@ class Viewer:
         self.clock = pygame.time.Clock()
         self.title = title
         self.make_swarm = make_swarm
+        self.observers = tuple(observers)
+        """Recorders and traces, handed to each run's `Runner`."""
+        self.max_steps = max_steps
+        """Passed to the `Runner` (None: its default)."""
         self.world = world
-        self.swarm = make_swarm(world) if start else None
+        self.runner: Runner | None = None
+        """The run on show, None until the editor hands over a first shape."""
+        if start:
+            self.start_run(world)
         self.renderer = Renderer(world)
         self.speed_index = min(range(len(SPEEDS)), key=lambda i: abs(SPEEDS[i] - speed))
         self.fps = fps
         self.screenshots = screenshots
-        self.observers = observers
-        """Recorders and traces: each captures the swarm after every step."""
-        self.max_steps = max_steps
         self.paused = False
         self.running = True
         self.notice = ""
@@ -119,32 +126,47 @@ class Viewer:
             self.start_editing()
 
     @property
+    def swarm(self) -> Swarm | None:
+        return None if self.runner is None else self.runner.swarm
+
+    def start_run(self, world: World) -> None:
+        """A new run on `world` (the first, a restart, or the editor's first shape)."""
+        self.runner = Runner(self.make_swarm(world), self.observers, self.max_steps)
+
+    @property
     def speed(self) -> float:
         return SPEEDS[self.speed_index]
 
     def run(self) -> None:
-        while self.tick():
-            pass
+        """Until the user quits; then the run's observers write their files, as at the end of
+        a headless run (or drop what they had half-written if the window failed)."""
+        try:
+            while self.tick():
+                pass
+        except BaseException:
+            if self.runner is not None:
+                self.runner.discard()
+            pygame.quit()
+            raise
+        if self.runner is not None:
+            self.runner.close()
         pygame.quit()
 
     @property
     def out_of_steps(self) -> bool:
-        """`max_steps` steps have run in total, as `runs.Runner` counts them."""
-        swarm = self.swarm
-        return (
-            self.max_steps is not None and swarm is not None and swarm.step_count >= self.max_steps
-        )
+        return self.runner is not None and self.runner.out_of_steps
 
     @property
     def idle(self) -> bool:
-        """Nothing changes unless the user acts: no swarm, paused, or formed with every robot
-        at rest and none wandering, or `max_steps` reached."""
-        swarm = self.swarm
-        if swarm is None or self.paused or self.out_of_steps:
+        """Nothing changes unless the user acts: no swarm yet, paused, out of steps, or the
+        run finished (formed, stranded, or a local program gone quiet, with no fault still to
+        come) with every robot at rest and none wandering."""
+        runner = self.runner
+        if runner is None or self.paused or runner.out_of_steps:
             return True
-        if not swarm.complete or swarm.faults.ahead(swarm.step_count):
-            return False
-        return not (np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any())
+        swarm = runner.swarm
+        moving = np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any()
+        return runner.finished and not moving
 
     def tick(self) -> bool:
         """One frame: events, simulation, drawing. Returns False once the user quit.
@@ -235,7 +257,7 @@ class Viewer:
         elif key in (pygame.K_MINUS, pygame.K_KP_MINUS):
             self.speed_index = max(self.speed_index - 1, 0)
         elif key == pygame.K_r and self.swarm is not None:
-            self.swarm = self.make_swarm(self.world)
+            self.start_run(self.world)
             self.notice = f"restarted with seed {self.swarm.seed}"
         elif key == pygame.K_e:
             self.start_editing()
@@ -266,9 +288,7 @@ class Viewer:
             self.notice += f": {program.name} does not localise (Program.estimate)"
 
     def step(self) -> None:
-        self.swarm.step()
-        for observer in self.observers:
-            observer.capture(self.swarm)
+        self.runner.step()
         self._follow_world()
 
     def _follow_world(self) -> None:
@@ -330,7 +350,7 @@ class Viewer:
                 agents = shape.count + ceil(SPARE_WHEN_PAINTED * shape.count)
                 spec = GroupSpec(placed.name, shape, placed.colour, agents, editor.pose)
                 self.world = build_world([spec], editor.canvas.size)
-                self.swarm = self.make_swarm(self.world)
+                self.start_run(self.world)
                 editor.agents, editor.resizable = self.world.agents, False
             else:
                 self.swarm.reshape(group, shape, editor.pose)
@@ -441,7 +461,7 @@ class Viewer:
         missing = len(swarm.filled) - len(swarm.cell)
         if missing > 0:
             formed += f"   {missing} agents short"
-        limit = "" if self.max_steps is None else f"/{self.max_steps}"
+        limit = f"/{self.runner.max_steps}"
         if self.out_of_steps:
             formed += "   max steps reached"
         if swarm.faults.lost:
