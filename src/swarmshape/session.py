@@ -152,7 +152,8 @@ class Session:
     ) -> Swarm | None:
         from swarmshape.ui.viewer import Viewer  # pygame only when a window is wanted
 
-        say(f"seed {config.seed}")
+        if not self.editing:  # the editor runs nothing until a shape is handed over
+            say(f"seed {config.seed}")
         viewer = Viewer(
             make_swarm,
             world,
