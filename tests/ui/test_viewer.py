@@ -12,7 +12,8 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.experiments.trace import Trace
 from swarmshape.runs import Observer, run
 from swarmshape.strategies import create
-from swarmshape.ui.viewer import SPEEDS, Viewer
+from swarmshape.ui.render import legend
+from swarmshape.ui.viewer import GAP, HUD_PAD, SPEEDS, Viewer
 from tests.conftest import grid_from, make_swarm, world_of
 from tests.ui.test_render import Shown
 
@@ -297,3 +298,57 @@ def test_a_local_program_gone_quiet_leaves_the_window_idle_where_a_headless_run_
         assert not view.swarm.complete
     finally:
         pygame.quit()
+
+
+# --- a HUD that explains itself ----------------------------------------------------------
+
+
+def test_the_pace_reads_right_for_one_step_many_and_fractions(viewer):
+    for speed, words in ((1, "1 step/frame"), (8, "8 steps/frame"), (0.125, "1 step/8 frames")):
+        viewer.speed_index = SPEEDS.index(speed)
+        assert f"   {words}   " in viewer.status()
+
+
+def test_an_idle_window_says_why_where_the_frame_rate_stood(viewer):
+    viewer.tick()
+    assert "FPS" in viewer.status() and "idle" not in viewer.status()
+    press(viewer, pygame.K_SPACE)
+    assert "idle: PAUSED, Space goes on" in viewer.status() and "FPS" not in viewer.status()
+    press(viewer, pygame.K_SPACE)
+    while not viewer.idle:
+        viewer.tick()
+    assert "idle: formed, nothing moves" in viewer.status()
+
+
+def test_a_notice_leaves_the_key_help_in_view(viewer):
+    viewer.tick()
+    press(viewer, pygame.K_r)
+    top, _, helps, _ = viewer._layout()
+    assert viewer._second_line() == "restarted with seed 3"
+    assert "restarted with seed 3" in [text for text, _ in top]
+    assert "r restart" in " ".join(helps) and "q quit" in " ".join(helps)
+
+
+def test_with_nothing_to_tell_the_second_line_says_what_runs(viewer):
+    viewer.tick()
+    assert viewer._second_line() == "bar.png: paper, 4 robots for 4 cells"
+
+
+@pytest.mark.parametrize("size", [(320, 240), (640, 400), (1280, 800), (2560, 1440)])
+def test_the_hud_fits_the_window_at_every_size(viewer, size):
+    """Every line of the bars fits the width (a single word too wide for it excepted), the
+    legend too (where it leaves the arena at least half the height), and the arena keeps
+    nearly half the window even when it is tiny."""
+    press(viewer, pygame.K_x)  # a long notice
+    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=size, w=size[0], h=size[1]))
+    viewer.tick()
+    top, keys, helps, area = viewer._layout()
+    room = size[0] - 2 * HUD_PAD
+    for text in [text for text, _ in top] + helps:
+        assert viewer.font.size(text)[0] <= room or " " not in text, text
+    for row in keys:
+        gaps = (len(row) - 1) * viewer.font.size(GAP)[0]
+        assert sum(viewer._key_width(key) for key in row) + gaps <= room
+    shown = sum(len(row) for row in keys)
+    assert shown == (len(legend(viewer.swarm)) if size[1] >= 400 else 0)
+    assert area.height >= 0.45 * size[1]
