@@ -88,9 +88,16 @@ def test_f12_saves_a_png_of_the_window(viewer, tmp_path):
     assert image.get_size() == viewer.screen.get_size()
 
 
+def resize(view: Viewer, size: tuple[int, int]) -> None:
+    """What a person's drag of the window's edge does: SDL resizes the window (the dummy
+    driver only does so through set_mode), then the window hears of it."""
+    pygame.display.set_mode(size, pygame.RESIZABLE)
+    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=size, w=size[0], h=size[1]))
+    view.tick()
+
+
 def test_window_resizes_and_q_quits(viewer):
-    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=(500, 300), w=500, h=300))
-    viewer.tick()
+    resize(viewer, (500, 300))
     assert viewer.screen.get_size() == (500, 300)
     press(viewer, pygame.K_q)
     assert not viewer.running
@@ -340,8 +347,7 @@ def test_the_hud_fits_the_window_at_every_size(viewer, size):
     legend too (where it leaves the arena at least half the height), and the arena keeps
     nearly half the window even when it is tiny."""
     press(viewer, pygame.K_x)  # a long notice
-    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=size, w=size[0], h=size[1]))
-    viewer.tick()
+    resize(viewer, size)
     top, keys, helps, area = viewer._layout()
     room = size[0] - 2 * HUD_PAD
     for text in [text for text, _ in top] + helps:

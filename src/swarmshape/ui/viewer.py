@@ -228,8 +228,8 @@ class Viewer:
     def handle(self, event: pygame.event.Event) -> None:
         if event.type == pygame.QUIT:
             self.quit()
-        elif event.type == pygame.VIDEORESIZE:
-            self.screen = pygame.display.set_mode(event.size, pygame.RESIZABLE)
+        elif event.type == pygame.VIDEORESIZE:  # SDL has resized the window's surface
+            self.screen = pygame.display.get_surface()  # set_mode would make a new window
             self.font = font_of(self._font_size())
         elif event.type == pygame.KEYDOWN and event.key == pygame.K_F12:
             self.notice = f"saved {self.screenshot()}"
