@@ -20,8 +20,8 @@ ALLOWED = {
     "strategies": {"numpy", "scipy", "swarmshape.core", "swarmshape.errors",
                    "swarmshape.strategies"},
     "io": {"numpy", "PIL", "swarmshape.core", "swarmshape.errors", "swarmshape.io"},
-    "ui": {"numpy", "scipy", "pygame", "PIL", "swarmshape.core", "swarmshape.errors",
-           "swarmshape.io", "swarmshape.ui", "swarmshape.runs"},
+    "ui": {"numpy", "scipy", "pygame", "PIL", "imageio_ffmpeg", "swarmshape.core",
+           "swarmshape.errors", "swarmshape.io", "swarmshape.ui", "swarmshape.runs"},
     "experiments": {"numpy", "matplotlib", "dask", "swarmshape.core", "swarmshape.errors",
                     "swarmshape.io", "swarmshape.experiments", "swarmshape.runs"},
     # the learning environment draws with the window's renderer, loaded only to render
