@@ -181,7 +181,7 @@ def _shared_options() -> argparse.ArgumentParser:
         help="stop that fraction of the robots for good where they stand; repeatable",
     )
     record = shared.add_argument_group("recording")
-    record.add_argument("--record", type=Path, help="write an animation: .gif, .webp or .png")
+    record.add_argument("--record", type=Path, help="write an animation: .gif, .webp, .png or .mp4")
     record.add_argument("--frames", type=Path, help="write numbered PNG frames to this folder")
     record.add_argument(
         "--record-every", type=int, default=1, help="record every K-th step (default 1)"

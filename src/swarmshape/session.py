@@ -144,7 +144,8 @@ class Session:
     ) -> Swarm | None:
         from swarmshape.ui.viewer import Viewer  # pygame only when a window is wanted
 
-        say(f"seed {config.seed}")
+        if not self.editing:  # the editor runs nothing until a shape is handed over
+            say(f"seed {config.seed}")
         viewer = Viewer(
             make_swarm,
             world,
@@ -155,10 +156,7 @@ class Session:
             observers=observers,
             max_steps=config.max_steps,
         )
-        viewer.run()
-        if viewer.swarm is not None:
-            for observer in observers:
-                observer.close(viewer.swarm)
+        viewer.run()  # closes the observers, as `Runner.finish` does
         return viewer.swarm
 
 
