@@ -156,7 +156,7 @@ def test_the_environment_shows_each_robot_exactly_what_a_local_program_senses():
         expected = program.seen[-1]
         for field in dataclasses.fields(Perception):
             mine, theirs = getattr(sense, field.name), getattr(expected, field.name)
-            if field.name == "offset":
+            if field.name in ("offset", "progress"):  # float32 in an observation
                 np.testing.assert_allclose(mine, theirs, atol=1e-5)
             elif field.name != "blueprint":
                 np.testing.assert_array_equal(mine, theirs, err_msg=field.name)
@@ -318,8 +318,9 @@ def test_the_batched_interface_takes_one_array_per_step():
     assert vec.action_space.shape == (vec.num_envs, 4)
     layout = vec.episode.layout
     assert len(layout.names) == layout.size == obs.shape[1]
-    assert layout.names[:8] == [
-        "ready", "cruising", "heading", "moved_x", "moved_y", "number", "group", "step"
+    assert layout.names[: len(OWN)] == [
+        "ready", "cruising", "heading", "progress", "moved_x", "moved_y", "number", "group",
+        "step",
     ]  # fmt: skip
     assert (layout.slots(obs)[:, :, 0] <= 1).all()
 

@@ -72,7 +72,7 @@ def test_robots_at_rest_that_want_trades_always_agree_one(robots):
     yes = np.ones(len(owner), dtype=bool)
     sense = Perception(
         number=np.arange(n), group=np.zeros(n, dtype=np.int64), ready=np.ones(n, dtype=bool),
-        heading=np.zeros(n, dtype=np.int64), cruising=np.zeros(n, dtype=bool),
+        heading=np.zeros(n, dtype=np.int64), cruising=np.zeros(n, dtype=bool), progress=np.zeros(n),
         moved=np.zeros((n, 2), dtype=np.int64), start=np.arange(0, n * (n - 1) + 1, n - 1),
         owner=owner, offset=(cells[other] - cells[owner]).astype(float), seed=~yes, kin=yes,
         heard=yes, message=message, seed_frame=np.zeros((len(owner), 2), dtype=np.int64),

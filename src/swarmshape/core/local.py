@@ -286,6 +286,7 @@ class LocalControl:
             ready=(swarm.ahead == 0) & acting,
             heading=np.where(swarm.ahead > 0, self.frame_directions[back, swarm.direction], 0),
             cruising=(swarm.ahead == 1) & acting,
+            progress=np.where(swarm.ahead > 0, swarm.offset, 0.0),
             moved=moved,
             start=start,
             owner=owner,

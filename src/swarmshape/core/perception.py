@@ -123,6 +123,9 @@ class Perception:
     """Under way with its next cell reserved and no further: a move straight on (`heading`)
     asked for now goes on without braking. Asked for nothing, it brakes and stops on that cell
     (it cannot turn while under way)."""
+    progress: np.ndarray
+    """How far, in cells, it has come from its cell's centre along `heading` (its odometer's
+    fraction of a cell; 0 at rest): its neighbours' offsets are from where it is now."""
     moved: np.ndarray
     """Odometry: the whole cells each robot moved since the last step ``(n, 2)``."""
     start: np.ndarray
