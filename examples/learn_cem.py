@@ -7,13 +7,15 @@ One shared policy drives every robot through the batched interface (one array pe
 A candidate's score is the sum of every robot's reward over an episode, which with the default
 reward is the coverage the swarm reaches. The features: whether the robot hears a seed, where
 it then is in the seed frame (the seed's cell less the sensed offset: a robot localising), the
-mean offset of the robots around it, and how many there are.
+mean offset of the robots around it, how many there are, and its own motion (at rest, or
+cruising in one of four directions: a robot under way goes on only if the policy says
+straight on again).
 """
 
 import numpy as np
 
 from swarmshape.env import vector_env
-from swarmshape.env.observe import DX, DY, FRAME_X, FRAME_Y, PRESENT, SEED
+from swarmshape.env.observe import CRUISING, DX, DY, FRAME_X, FRAME_Y, HEADING, PRESENT, READY, SEED
 
 STEPS = 80
 env = vector_env(np.ones((3, 4), dtype=bool), max_steps=STEPS)
@@ -21,8 +23,8 @@ layout = env.layout
 
 
 def features(obs: np.ndarray) -> np.ndarray:
-    """Per robot ``(n, 7)``: a bias, hears a seed, its frame cell if it does (else 0, 0), the
-    mean offset of the robots around it, their number / 8."""
+    """Per robot ``(n, 13)``: a bias, hears a seed, its frame cell if it does (else 0, 0), the
+    mean offset of the robots around it, their number / 8, at rest, cruising, its heading."""
     slots = layout.slots(obs)
     seed = slots[:, :, SEED] > 0
     hears = seed.any(axis=1)
@@ -32,7 +34,10 @@ def features(obs: np.ndarray) -> np.ndarray:
     count = robots.sum(axis=1)
     around = (slots[:, :, [DX, DY]] * robots[:, :, None]).sum(axis=1)
     around /= np.maximum(count, 1)[:, None]
-    return np.column_stack([np.ones(len(obs)), hears, where, around, count / 8])
+    own = layout.own(obs)
+    heading = own[:, HEADING, None] == np.arange(1, 5)
+    motion = np.column_stack([own[:, READY], own[:, CRUISING], heading])
+    return np.column_stack([np.ones(len(obs)), hears, where, around, count / 8, motion])
 
 
 def score(weights: np.ndarray, seed: int = 11) -> float:
@@ -52,7 +57,7 @@ shape = (5, features(env.reset(seed=0)[0]).shape[1])  # 5 moves x features
 mean, spread = np.zeros(shape), np.ones(shape)
 before = score(mean + rng.normal(0, 1e-3, shape))
 print(f"coverage with the untrained policy: {before:.0%}")
-for generation in range(8):
+for generation in range(12):
     candidates = mean + spread * rng.normal(size=(12, *shape))
     scores = np.array([score(w) for w in candidates])
     elite = candidates[np.argsort(scores)[-3:]]

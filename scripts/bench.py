@@ -34,13 +34,14 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from swarmshape.config import RunConfig
 from swarmshape.core.bounds import unit_speed_optimum
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Shape
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.io.bitmap import load_grid
-from swarmshape.runs import Observer, RunConfig, Runner, start_swarm
+from swarmshape.runs import Observer, Runner, start_swarm
 
 ROOT = Path(__file__).resolve().parent.parent
 SHAPES = ROOT / "shapes"

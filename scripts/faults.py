@@ -161,6 +161,17 @@ def coverage_plot(curves: dict[str, list[float]], path: Path) -> None:
     figure.savefig(path)
 
 
+def pictures(strategies: list[str], cells: int, folder: Path) -> None:
+    """The coverage plot (one heal per strategy, with spares) and the healing picture."""
+    curves = {}
+    for strategy in strategies:
+        formed = form(strategy, cells, spares=True)
+        curves[strategy] = heal(formed, strategy, "random")[1]
+        print(strategy, "healed in", len(curves[strategy]) - 2, "steps", flush=True)
+    coverage_plot(curves, folder / "fault-coverage.png")
+    healing_picture(folder / "faults-healing.png")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--strategies", nargs="+", default=["optimal", "greedy", "random", "paper"])
@@ -174,13 +185,7 @@ def main() -> None:
     )
     args = parser.parse_args()
     if args.pictures_only:
-        curves = {}
-        for strategy in args.strategies:
-            formed = form(strategy, args.cells, spares=True)
-            curves[strategy] = heal(formed, strategy, "random")[1]
-            print(strategy, "healed in", len(curves[strategy]) - 2, "steps", flush=True)
-        coverage_plot(curves, DOCS / "fault-coverage.png")
-        healing_picture(DOCS / "faults-healing.png")
+        pictures(args.strategies, args.cells, DOCS)
         return
     results: dict = {"cells": args.cells, "seed": SEED, "share_removed": SHARE, "spares": SPARES}
     curves = {}

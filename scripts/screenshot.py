@@ -16,7 +16,8 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 import pygame
 
-from swarmshape.runs import configure, load_world, start_cells, start_swarm
+from swarmshape.config import configure
+from swarmshape.runs import load_world, start_cells, start_swarm
 from swarmshape.ui.render import OVERLAYS
 from swarmshape.ui.viewer import Viewer
 
@@ -35,26 +36,47 @@ def main() -> None:
         "--overlay", action="append", default=[], choices=OVERLAYS, help="a local program's"
     )
     args = parser.parse_args()
-    config = configure(
-        args.path, seed=args.seed, strategy=args.strategy, start=args.start, cells=args.cells
-    )
+    options = vars(args)
+    path, out = options.pop("path"), options.pop("out")
+    options["size"], options["overlays"] = tuple(args.size), options.pop("overlay")
+    step = shoot(path, out, **options)
+    print(f"{out}: step {step}")
+
+
+def shoot(
+    path: Path,
+    out: Path,
+    *,
+    steps: int = 1000,
+    seed: int = 1,
+    size: tuple[int, int] = (1280, 800),
+    strategy: str = "optimal",
+    start: str | None = None,
+    cells: int | None = None,
+    overlays: tuple[str, ...] = (),
+) -> int:
+    """Run `path` for `steps` steps in an offscreen window, paused, with `overlays` on, and
+    save the window to `out`; return the step shown."""
+    config = configure(path, seed=seed, strategy=strategy, start=start, cells=cells)
     world = load_world(config)
-    start = start_cells(config, world)
+    first = start_cells(config, world)
     viewer = Viewer(
-        lambda new: start_swarm(config, new, start if new is world else None),
+        lambda new: start_swarm(config, new, first if new is world else None),
         world,
         title=world.name,
-        size=tuple(args.size),
+        size=size,
         speed=1,
         fps=0,
     )
-    while viewer.swarm.step_count < args.steps:
-        viewer.swarm.step()
+    while viewer.swarm.step_count < steps:
+        viewer.step()
     viewer.paused = True
-    viewer.overlays = set(args.overlay)
+    viewer.overlays = set(overlays)
     viewer.tick()
-    pygame.image.save(viewer.screen, args.out)
-    print(f"{args.out}: step {viewer.swarm.step_count}")
+    pygame.image.save(viewer.screen, out)
+    step = viewer.swarm.step_count
+    pygame.quit()
+    return step
 
 
 if __name__ == "__main__":

@@ -18,13 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
+from swarmshape.config import RunConfig
 from swarmshape.core.audit import overlapping_pairs
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.io.bitmap import load_grid
-from swarmshape.runs import RunConfig, start_swarm
+from swarmshape.runs import start_swarm
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 

@@ -57,12 +57,11 @@ def make_swarm(
     *,
     agents: int | None = None,
     seed: int = 0,
-    order: str = "outward",
     strategy: str = "paper",
 ) -> Swarm:
     """A swarm forming `shape` (moved beside its seeds for a program that grows from them,
     as `runs.load_world` does)."""
-    program = create(strategy, order=order)
+    program = create(strategy)
     shape = shape if isinstance(shape, Shape) else Shape(shape)
     if getattr(program, "grows_from_seeds", False):
         shape = shape.seeded()

@@ -123,9 +123,10 @@ OTHERS = ["notes.txt", "data.npz", "mine.py", "sub", "."]
 
 def make_material(folder: Path) -> Path:
     """Write the valid inputs (see `INPUTS`) into `folder`, with swarmshape itself."""
+    from swarmshape.config import configure
     from swarmshape.experiments.results import open_results
     from swarmshape.experiments.sweep import read_sweep, run_key, run_one
-    from swarmshape.runs import build, configure, load_world, run, save
+    from swarmshape.runs import build, load_world, run, save
 
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "sub").mkdir(exist_ok=True)
@@ -170,6 +171,10 @@ STRATEGIES = ["optimal", "greedy", "random", "paper", "mine.py:Mine", "nope", ""
               "missing.py:X", "notes.txt:X", "sub:X", "mine.py:", "mine.py:Optimal",
               "x" * 300, "x" * 300 + ".py:X"]  # fmt: skip
 ORDERS = ["outward", "left-to-right", "random", "", "inward", "OUTWARD"]
+OPTIONS = [f"order={order}" for order in ORDERS] + [
+    "startup=3", "alone=-1", "alone=1e3", "patience=²", "nope=1", "=", "order", "loss_memory=nan",
+]  # fmt: skip
+"""``--set`` values: the paper's orders and self-assembly's numbers, some bad."""
 
 
 def whole(pick: Pick, valid: Sequence[str]) -> str:
@@ -339,7 +344,7 @@ def run_options(pick: Pick, paths: Paths) -> dict[str, Callable[[], list[str]]]:
         "--seed": lambda: [whole(pick, ["0", "1", "7", str(2**63 - 1), str(2**63)])],
         "--agents": lambda: [whole(pick, ["1", "2", "5", "20", "60", "1000001"])],
         "--strategy": lambda: [pick.choice(STRATEGIES)],
-        "--order": lambda: [pick.choice(ORDERS)],
+        "--set": lambda: [pick.choice(OPTIONS)],
         "--cells": lambda: [whole(pick, ["1", "2", "5", "12", "40", "5000", "100000", "10**9"])],
         "--threshold": lambda: [number(pick, ["0.3", "0.5", "0.7", "0.999", "1e-9"])],
         "--invert": list,

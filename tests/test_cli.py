@@ -49,7 +49,8 @@ def test_same_seed_gives_the_same_metrics_file_byte_for_byte(tmp_path):
 
 def test_options_override_the_scenario(tmp_path):
     out = tmp_path / "m.json"
-    args = [str(SHAPES / "square.png"), "--headless", "--agents", "20", "--order", "random"]
+    args = [str(SHAPES / "square.png"), "--headless", "--agents", "20", "--strategy", "paper",
+            "--set", "order=random"]  # fmt: skip
     assert main([*args, "--seed", "1", "--metrics", str(out)]) == 0
     metrics = json.loads(out.read_text())
     assert metrics["agents"] == 20 and metrics["targets"] <= 20 and metrics["scale"] < 1
@@ -67,7 +68,7 @@ def test_version_and_help_and_strategies():
     assert swarmshape("--version").stdout.startswith("swarmshape ")
     help_text = swarmshape("run", "--help").stdout
     for option in ("--seed", "--agents", "--cells", "--threshold", "--invert", "--headless",
-                   "--metrics", "--max-steps", "--order", "--strategy"):  # fmt: skip
+                   "--metrics", "--max-steps", "--set", "--strategy"):  # fmt: skip
         assert option in help_text
     assert "paper" in swarmshape("strategies").stdout
 
@@ -82,7 +83,10 @@ def bad_inputs(tmp_path):
         "directory": ([str(tmp_path)], "directory"),
         "not an image": ([str(tmp_path / "text.png")], "not an image"),
         "no ink": ([str(tmp_path / "white.png"), "--invert"], "no shape found"),
-        "zero agents": ([str(SHAPES / "line.png"), "--agents", "0"], "at least 1"),
+        "zero agents": (
+            [str(SHAPES / "line.png"), "--agents", "0"],
+            "--agents: must be a whole number of 1 or more",
+        ),
         "malformed toml": ([str(tmp_path / "bad.toml")], "not valid TOML"),
         "unknown key": ([str(tmp_path / "typo.toml")], "unknown key 'shap'"),
         "unknown strategy": ([str(SHAPES / "line.png"), "--strategy", "nope"], "unknown strategy"),
@@ -144,4 +148,4 @@ def test_an_unknown_start_word_is_one_line_on_stderr():
     result = swarmshape(str(SHAPES / "line.png"), "--headless", "--start", "pakced")
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and "expected packed, scatter or a CSV file" in lines[0]
+    assert len(lines) == 1 and "--start: must be packed, scatter or a CSV file" in lines[0]

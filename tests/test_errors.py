@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from swarmshape.io.checkpoint import VERSION
 from tests.conftest import SHAPES
 
 TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
@@ -53,7 +54,7 @@ def bad_files(tmp_path_factory) -> Path:
         "shapes = ['one.png']\nstrategies = ['optimal']\nspeed = 3\n"
     )
     (folder / "old.state").write_bytes(b"swarmshape state 1\n\x80\x05garbage")
-    manifest = {"format": "swarmshape state", "version": 3, "values": {}, "arrays": []}
+    manifest = {"format": "swarmshape state", "version": VERSION, "values": {}, "arrays": []}
     with (folder / "damaged.state").open("wb") as handle:
         text = json.dumps({**manifest, "checksum": "0"}).encode()
         np.savez(handle, manifest=np.frombuffer(text, dtype=np.uint8))

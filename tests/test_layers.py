@@ -21,14 +21,16 @@ ALLOWED = {
     "strategies": {"numpy", "scipy", "swarmshape.core", "swarmshape.errors",
                    "swarmshape.strategies"},
     "io": {"numpy", "PIL", "swarmshape.core", "swarmshape.errors", "swarmshape.io"},
-    "ui": {"numpy", "scipy", "pygame", "PIL", "swarmshape.core", "swarmshape.errors",
-           "swarmshape.io", "swarmshape.ui", "swarmshape.runs"},
+    "ui": {"numpy", "scipy", "pygame", "PIL", "imageio_ffmpeg", "swarmshape.core",
+           "swarmshape.errors", "swarmshape.io", "swarmshape.ui", "swarmshape.runs",
+           "swarmshape.config"},
     "experiments": {"numpy", "matplotlib", "dask", "swarmshape.core", "swarmshape.errors",
-                    "swarmshape.io", "swarmshape.experiments", "swarmshape.runs"},
-    # the learning environment draws with the window's renderer, loaded only to render
-    "env": {"numpy", "gymnasium", "pettingzoo", "pygame", "swarmshape.core",
+                    "swarmshape.io", "swarmshape.experiments", "swarmshape.runs",
+                    "swarmshape.config"},
+    # the learning environment draws through ui/screen.py, loaded only to render
+    "env": {"numpy", "gymnasium", "pettingzoo", "swarmshape.core",
             "swarmshape.errors", "swarmshape.io", "swarmshape.env", "swarmshape.runs",
-            "swarmshape.ui.render"},
+            "swarmshape.config", "swarmshape.ui.screen"},
 }  # fmt: skip
 
 

@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
+
+from PIL import Image
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -20,3 +23,29 @@ def test_the_fault_figures_run_on_a_small_disc(tmp_path):
     subprocess.run(command, cwd=ROOT, env=env, check=True, capture_output=True, timeout=300)
     healed = json.loads(out.read_text())["optimal"]["with spares"]
     assert healed["random"]["final_coverage"] == 1.0 and healed["random"]["overlaps"] == 0
+
+
+def pictures_script(*args: str, timeout: int = 300) -> str:
+    command = [sys.executable, "scripts/make_docs_pictures.py", *args]
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
+    done = subprocess.run(
+        command, cwd=ROOT, env=env, check=True, capture_output=True, text=True, timeout=timeout
+    )
+    return done.stdout
+
+
+def test_every_picture_in_docs_has_a_maker_that_the_readme_names():
+    made = set(pictures_script("--list").split())
+    readme = (ROOT / "README.md").read_text()
+    shown = set(re.findall(r"\(docs/([\w.-]+\.(?:png|gif))\)", readme))
+    kept = {path.name for pattern in ("*.png", "*.gif") for path in (ROOT / "docs").glob(pattern)}
+    assert shown and shown <= made and kept <= made, (shown - made, kept - made)
+    assert "scripts/make_docs_pictures.py" in readme
+
+
+def test_the_window_pictures_are_made_anew(tmp_path):
+    pictures_script("editor.png", "star-concurrent.png", "--out", str(tmp_path))
+    for name in ("editor.png", "star-concurrent.png"):
+        with Image.open(tmp_path / name) as image:
+            assert image.size == (1280, 800)
+            assert len(image.convert("RGB").getcolors(1 << 16)) > 10, "a drawn window"

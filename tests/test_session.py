@@ -220,3 +220,21 @@ def test_a_strategy_file_in_the_working_folder_runs_with_the_installed_command(t
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
     assert "nearest-first" in result.stdout
+
+
+def test_the_editor_names_no_seed_while_nothing_runs(tmp_path, monkeypatch, capsys):
+    import pygame
+
+    from swarmshape.ui.viewer import Viewer
+
+    real_tick = Viewer.tick
+
+    def quit_at_once(self):
+        pygame.event.post(pygame.event.Event(pygame.QUIT))
+        return real_tick(self)
+
+    monkeypatch.setattr(Viewer, "tick", quit_at_once)
+    assert main(["edit", str(tmp_path / "new.png")]) == 0
+    assert "seed" not in capsys.readouterr().out
+    assert main([str(SHAPES / "line.png"), "--seed", "5"]) == 0
+    assert capsys.readouterr().out.startswith("seed 5\n"), "a window run names its seed"

@@ -29,10 +29,8 @@ __all__ = [
 ]  # fmt: skip
 
 _HOMES = {
-    "swarmshape.runs": (
-        "RunConfig", "configure", "build", "start_swarm", "run", "Runner", "Observer", "save",
-        "resume",
-    ),
+    "swarmshape.config": ("RunConfig", "configure"),
+    "swarmshape.runs": ("build", "start_swarm", "run", "Runner", "Observer", "save", "resume"),
     "swarmshape.core.swarm": ("Swarm",),
     "swarmshape.core.world": ("World", "GroupSpec", "build_world"),
     "swarmshape.core.shape": ("Shape", "Pose"),

@@ -18,22 +18,29 @@ import warnings
 from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
+from swarmshape.config import (
+    DEFAULT_SHAPE,
+    SETTINGS,
+    CommandLine,
+    RunConfig,
+    configure,
+    option_of,
+)
 from swarmshape.core.faults import FaultEvent, parse_event, parse_region
-from swarmshape.core.world import START_LAYOUTS
-from swarmshape.errors import InputError
-from swarmshape.runs import DEFAULT_SHAPE, RunConfig, configure, load_world, resume, start_of
+from swarmshape.core.options import FLAG, PLUGIN_KINDS, Spec, specs
+from swarmshape.errors import InputError, SettingError, SettingWarning
+from swarmshape.runs import load_world, resume
 from swarmshape.session import Outputs, Session, preview_text
-from swarmshape.strategies.fill_order import ORDERS
 
 COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check")
 NOT_FORMED = 3
 """Exit status of a headless run that stopped before its shape formed (and of a failed check)."""
-RUN_OPTIONS = ("strategy", "order", "seed", "agents", "cells", "threshold", "arena",
-               "max_speed", "max_accel", "max_steps", "start", "fit", "speed_variation",
-               "sense_radius", "distance_noise", "msg_loss", "failure_rate")  # fmt: skip
-"""Command-line options that are fields of `RunConfig` (``--invert`` too, when given)."""
+FLAGGED = tuple(spec for spec in SETTINGS if spec.extra.get("flag", True))
+"""Run settings that are command-line flags (``--max-speed``); the others the command line
+spells its own way: the shape is the path, faults are --fail, --fail-region and --stall, and a
+plug-in's options are --set."""
 
 
 class Parser(argparse.ArgumentParser):
@@ -68,11 +75,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     out = run.add_argument_group("output")
     out.add_argument("--headless", action="store_true", help="no window: run, print a summary")
-    out.add_argument(
-        "--max-steps",
-        type=int,
-        help=f"stop after this many steps (default {RunConfig.max_steps})",
-    )
     out.add_argument("--metrics", type=Path, help="write the run's metrics as JSON to this file")
     edit = commands.add_parser(
         "edit",
@@ -109,7 +111,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--format", choices=("png", "svg"), action="append", help="png (default), svg"
     )
     plot.add_argument("--force", action="store_true", help="overwrite existing plots")
-    commands.add_parser("strategies", help="list the available strategies")
+    listing = commands.add_parser(
+        "strategies",
+        help="list the available strategies, or one strategy's options",
+        description="List every strategy, or with a NAME, what it reads and its options.",
+    )
+    listing.add_argument("name", nargs="?", help="a strategy, to list its options")
     check = commands.add_parser(
         "check",
         help="run a strategy on small random shapes and report any broken invariant",
@@ -128,84 +135,31 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _shared_options() -> argparse.ArgumentParser:
     """Options of both run and edit; unset ones fall back to the scenario, then the defaults."""
-    defaults = RunConfig()
     shared = Parser(add_help=False)
-    shared.add_argument("--seed", type=int, help="random seed (default: a fresh one, printed)")
-    shared.add_argument("--agents", type=int, help="number of robots (default: one per cell)")
+    groups = {"run": shared}
+    for spec in FLAGGED:
+        group = spec.extra.get("group", "run")
+        if group not in groups:
+            groups[group] = shared.add_argument_group(group)
+        _add_flag(groups[group], spec)
     shared.add_argument(
-        "--strategy",
-        help=f"who goes where: a name from 'swarmshape strategies' or package.module:Class "
-        f"(default {defaults.strategy})",
+        "--set",
+        action="append",
+        type=_option_text,
+        metavar="NAME=VALUE",
+        help="one of the strategy's own options (swarmshape strategies NAME lists them); "
+        "repeatable",
     )
-    shared.add_argument(
-        "--order",
-        choices=ORDERS,
-        help=f"the paper strategy's fill order (default {defaults.order})",
-    )
-    image = shared.add_argument_group("image loading")
-    image.add_argument(
-        "--cells",
-        type=int,
-        help="cells across the shape's long side; images shrink or grow to it "
-        "(default: the image's own size, at most 32)",
-    )
-    image.add_argument(
-        "--threshold",
-        type=float,
-        help=f"luminance 0..1 between ink and background (default {defaults.threshold})",
-    )
-    image.add_argument("--invert", action="store_true", help="the ink is the light part")
-    image.add_argument(
-        "--fit",
-        choices=("agents",),
-        help="agents: size the shape to --agents (as many cells as robots, or just fewer)",
-    )
+    image = groups["image loading"]
     image.add_argument(
         "--preview", action="store_true", help="print the shape as text and stop (no run)"
     )
-    sim = shared.add_argument_group("simulation")
-    sim.add_argument("--arena", type=_size, help="arena size in cells as WxH (default: automatic)")
-    sim.add_argument(
-        "--max-speed", type=float, help=f"cells per step (default {defaults.max_speed})"
-    )
-    sim.add_argument(
-        "--max-accel", type=float, help=f"cells per step squared (default {defaults.max_accel})"
-    )
-    sim.add_argument(
-        "--speed-variation",
-        type=float,
-        help="each robot's top speed is --max-speed times a factor from [1 - V, 1] (default 0)",
-    )
+    sim = groups["simulation"]
     sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
-    local = shared.add_argument_group("local programs (what a robot senses)")
-    local.add_argument(
-        "--sense-radius",
-        type=float,
-        help="cells within which a robot senses and hears others "
-        f"(default {defaults.sense_radius:g})",
-    )
-    local.add_argument(
-        "--distance-noise",
-        type=float,
-        help="standard deviation of sensed offsets, in cells (default 0)",
-    )
-    local.add_argument(
-        "--msg-loss",
-        type=float,
-        help="chance per step that a link between neighbours fails; Kilombo's msgSuccessRate is "
-        "1 - P (default 0)",
-    )
-    sim.add_argument(
-        "--start",
-        type=_start,
-        help="where robots start: packed (a block against the seeds, as in the Kilobot "
-        "self-assembly experiments), scatter (random free cells, the default), or a CSV of "
-        "start cells (columns x,y, one row per robot)",
-    )
     sim.add_argument(
         "--load-state", type=Path, help="resume a run saved with --save-state (PATH not needed)"
     )
-    faults = shared.add_argument_group("faults")
+    faults = groups["faults"]
     faults.add_argument(
         "--fail",
         action="append",
@@ -226,14 +180,8 @@ def _shared_options() -> argparse.ArgumentParser:
         metavar="FRACTION@STEP",
         help="stop that fraction of the robots for good where they stand; repeatable",
     )
-    faults.add_argument(
-        "--failure-rate",
-        type=float,
-        metavar="P",
-        help="each robot fails (is removed) with probability P per step (default 0)",
-    )
     record = shared.add_argument_group("recording")
-    record.add_argument("--record", type=Path, help="write an animation: .gif, .webp or .png")
+    record.add_argument("--record", type=Path, help="write an animation: .gif, .webp, .png or .mp4")
     record.add_argument("--frames", type=Path, help="write numbered PNG frames to this folder")
     record.add_argument(
         "--record-every", type=int, default=1, help="record every K-th step (default 1)"
@@ -260,6 +208,61 @@ def _shared_options() -> argparse.ArgumentParser:
     return shared
 
 
+def _add_flag(parser: argparse._ActionsContainer, spec: Spec) -> None:
+    """A run setting's flag: ``--max-speed X``, checked as the setting checks it."""
+    flag = "--" + spec.name.replace("_", "-")
+    default = "" if spec.default is None else f" (default {_shown(spec.default)})"
+    if spec.kind is FLAG:
+        parser.add_argument(flag, action="store_true", default=None, help=spec.help)
+        return
+
+    def parse(text: str) -> Any:
+        try:
+            return spec.parse(text)
+        except SettingError as error:
+            raise argparse.ArgumentTypeError(error.problem) from None
+
+    metavar = spec.kind.metavar if spec.choices is None else "{" + ",".join(spec.choices) + "}"
+    parser.add_argument(flag, type=parse, metavar=metavar, help=f"{spec.help}{default}")
+
+
+def _shown(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:g}"
+    return f"{value:,}" if isinstance(value, int) and not isinstance(value, bool) else str(value)
+
+
+def settings_table() -> str:
+    """The README's table of run settings, made from `RunConfig`'s declarations."""
+    rows = ["| on the command line | in files | meaning |", "| --- | --- | --- |"]
+    for spec in SETTINGS:
+        flag = "--" + spec.name.replace("_", "-")
+        if spec.kind is FLAG:
+            cli = f"`{flag}`"
+        elif spec in FLAGGED:
+            metavar = spec.kind.metavar if spec.choices is None else "|".join(spec.choices)
+            cli = f"`{flag} {metavar}`"
+        else:
+            cli = spec.extra["cli"]
+        files = spec.extra.get("files", f"`{spec.name}`")
+        meaning = spec.help
+        if spec.kind is not FLAG and spec.choices is None and spec.range_text():
+            meaning += f"; {spec.describe()}"
+        if spec.default not in (None, (), {}) and spec.kind is not FLAG:
+            meaning += f"; default {_shown(spec.default)}"
+        if spec.readers != PLUGIN_KINDS:
+            meaning += f"; read by {' and '.join(sorted(spec.readers))} plug-ins only"
+        rows.append(f"| {cli} | {files} | {meaning} |")
+    return "\n".join(rows)
+
+
+def _option_text(text: str) -> tuple[str, CommandLine]:
+    name, equals, value = text.partition("=")
+    if not equals or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}")
+    return name.strip(), CommandLine(value)
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         width, height = (int(part) for part in text.lower().split("x"))
@@ -268,16 +271,6 @@ def _size(text: str) -> tuple[int, int]:
             f"expected WIDTHxHEIGHT, e.g. 60x40, got {text!r}"
         ) from None
     return width, height
-
-
-def _start(text: str) -> str | Path:
-    """A start layout by name, or a CSV of start cells (see `runs.start_of`)."""
-    try:
-        return start_of(text)
-    except InputError:
-        raise argparse.ArgumentTypeError(
-            f"expected {', '.join(START_LAYOUTS)} or a CSV file of start cells, got {text!r}"
-        ) from None
 
 
 def _version() -> str:
@@ -308,13 +301,17 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help", "--version")):
         argv.insert(0, "run")
-    args = build_parser().parse_args(argv)
-    warnings.showwarning = _first_warning()
+    parser = build_parser()
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:
+        parser.error(_unrecognised(unknown))
+    flagged = {spec.name for spec in FLAGGED if getattr(args, spec.name, None) is not None}
+    warnings.showwarning = _warnings_shown(flagged)
     _reuse_freed_memory()
     try:
         return COMMAND_FUNCTIONS[args.command](args)
     except InputError as error:
-        print(f"swarmshape: error: {_one_line(str(error))}", file=sys.stderr)
+        print(f"swarmshape: error: {_one_line(_spelt(error, flagged))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("swarmshape: interrupted", file=sys.stderr)
@@ -327,17 +324,35 @@ def main(argv: list[str] | None = None) -> int:
         return 1
 
 
-def _first_warning() -> Callable[..., None]:
-    """How a command shows warnings: as one line on stderr, like an error, without a source
-    line below it; and only its first, which names the option that helps (a picture squeezed
-    into one cell also has too many robots for it: raising --cells cures both)."""
-    shown = False
+def _unrecognised(unknown: list[str]) -> str:
+    """argparse's complaint, or, for a plug-in's option given as a flag, how to give it."""
+    for word in unknown:
+        name = word.lstrip("-").partition("=")[0].replace("-", "_")
+        if word.startswith("--") and option_of(name):
+            return f"{word} is {option_of(name)}: give it as --set {name}=VALUE"
+    return f"unrecognized arguments: {' '.join(unknown)}"
+
+
+def _spelt(problem: SettingError | SettingWarning | Exception, flagged: set[str]) -> str:
+    """A setting's message, naming its flag when the value came from the command line."""
+    if isinstance(problem, SettingError | SettingWarning) and problem.setting in flagged:
+        return f"--{problem.setting.replace('_', '-')} {problem.problem}"
+    return str(problem)
+
+
+def _warnings_shown(flagged: set[str]) -> Callable[..., None]:
+    """How a command shows warnings: each as one line on stderr, like an error, without a
+    source line below it. Of the shape's warnings only the first, which names the option that
+    helps (a picture squeezed into one cell also has too many robots for it: raising --cells
+    cures both); every setting that changes nothing is named."""
+    shown: set[str] = set()
 
     def show(message: Warning | str, category: type, *_: object, **__: object) -> None:
-        nonlocal shown
-        if not shown:
-            print(f"swarmshape: warning: {_one_line(str(message))}", file=sys.stderr)
-            shown = True
+        text = _spelt(message, flagged) if isinstance(message, Warning) else str(message)
+        kind = text if category is SettingWarning else "shape"
+        if kind not in shown:
+            print(f"swarmshape: warning: {_one_line(text)}", file=sys.stderr)
+            shown.add(kind)
 
     return show
 
@@ -362,13 +377,12 @@ def _crash_log() -> str:
 
 def run_session(args: argparse.Namespace) -> int:
     """``run`` and ``edit``: a run described by the options, or a saved one resumed."""
-    max_steps = getattr(args, "max_steps", None)
-    given = {name: getattr(args, name, None) for name in RUN_OPTIONS}
-    given["invert"] = args.invert or None
+    given = {spec.name: getattr(args, spec.name) for spec in FLAGGED}
     given["faults"] = fault_events(args)
+    given["options"] = dict(args.set) if args.set else None
     if args.load_state is not None:
         _nothing_that_a_resume_ignores(args, given)
-        config = RunConfig(**({} if max_steps is None else {"max_steps": max_steps}))
+        config = RunConfig(**({} if args.max_steps is None else {"max_steps": args.max_steps}))
     else:
         config = configure(args.path, **given)
     if args.preview:
@@ -421,7 +435,7 @@ def _nothing_that_a_resume_ignores(args: argparse.Namespace, given: dict) -> Non
     ignored = [name for name, value in given.items() if value is not None]
     ignored = [name for name in ignored if name not in ("max_steps", "strategy")]
     if ignored:
-        flag = "--" + ignored[0].replace("_", "-")
+        flag = "--set" if ignored[0] == "options" else "--" + ignored[0].replace("_", "-")
         raise InputError(f"--load-state resumes a saved run as it was; {flag} cannot change it")
 
 
@@ -444,13 +458,37 @@ def run_plot(args: argparse.Namespace) -> int:
 
 
 def list_strategies(args: argparse.Namespace) -> int:
-    from swarmshape.strategies import available
+    from swarmshape.strategies import available, get
 
+    if args.name is not None:
+        print(describe_plugin(args.name, get(args.name)))
+        return 0
     known = available()
     width = max(len(name) for name in known)
     for name, cls in sorted(known.items()):
         print(f"{name:<{width}}  {cls.kind:<7}  {cls.description}")
     return 0
+
+
+def describe_plugin(name: str, cls: type) -> str:
+    """A plug-in's kind, description and every option it takes, for ``strategies NAME``."""
+    lines = [f"{name}  ({cls.kind})  {cls.description}"]
+    if cls.grows_from_seeds:
+        lines.append("forms only the part of a shape that is one piece with its seeds, no holes")
+    unread = [spec.name for spec in SETTINGS if cls.kind not in spec.readers]
+    if unread:
+        lines.append(f"does not read the run settings {', '.join(unread)}")
+    options = specs(cls.Options)
+    if not options:
+        lines.append("takes no options")
+        return "\n".join(lines)
+    lines.append("options (--set NAME=VALUE; [options] in a scenario; options.NAME in a sweep):")
+    width = max(len(spec.name) for spec in options)
+    for spec in options:
+        lines.append(f"  {spec.name:<{width}}  {spec.describe()}, default {_shown(spec.default)}")
+        if spec.help:
+            lines.append(f"  {'':<{width}}  {spec.help}")
+    return "\n".join(lines)
 
 
 def run_check(args: argparse.Namespace) -> int:

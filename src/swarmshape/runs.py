@@ -1,4 +1,4 @@
-"""One way to describe, build and run a swarm: `RunConfig`, `configure`, `build`, `Runner`.
+"""One way to build and run a swarm: `build`, `Runner`, `save` and `resume`.
 
 Every entry point goes through here: the command line, sweeps, the window's restart, the
 benchmark and the soak. A run is a typed description plus a seed::
@@ -15,187 +15,22 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from importlib import resources
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from swarmshape import strategies
-from swarmshape.core.faults import FaultEvent, Faults, check_rate, events_from_values
-from swarmshape.core.local import Program
-from swarmshape.core.motion import Limits
-from swarmshape.core.perception import Senses
+from swarmshape.config import RunConfig, plugin_options
+from swarmshape.core.faults import Faults
+from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot, prefixed
-from swarmshape.core.steering import Strategy
-from swarmshape.core.swarm import Params, Swarm
-from swarmshape.core.world import START_LAYOUTS, World, build_world, packed_start
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import World, build_world, packed_start
 from swarmshape.errors import InputError
-from swarmshape.io.bitmap import DEFAULT_THRESHOLD, ShapeWarning
+from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.io.checkpoint import load_state, save_state
-from swarmshape.io.scenario import ImageOptions, load_scenario, read_start_cells, scenario_settings
-from swarmshape.strategies.fill_order import DEFAULT_ORDER, ORDERS
-
-DEFAULT_SHAPE = "horseshoe.png"
-
-
-@dataclass(frozen=True)
-class RunConfig:
-    """Everything that decides a run. The defaults here are the project's only defaults."""
-
-    shape: Path | None = None
-    """An image or a ``.toml`` scenario; None is the bundled horseshoe."""
-    strategy: str = "optimal"
-    """A registered name, an installed one, or ``package.module:Class``."""
-    order: str = DEFAULT_ORDER
-    """The paper strategy's fill order (other strategies ignore it)."""
-    seed: int | None = None
-    """None draws a fresh seed when the swarm is built; the swarm records it."""
-    agents: int | None = None
-    """Robots of a one-group run; None is one per cell of the shape."""
-    cells: int | None = None
-    """Cells across the shape's long side; None is the image's own size, at most 32."""
-    threshold: float = DEFAULT_THRESHOLD
-    invert: bool = False
-    arena: tuple[int, int] | None = None
-    """Arena size in cells; None sizes it to the shape and the robots."""
-    max_speed: float = Limits.max_speed
-    max_accel: float = Limits.max_accel
-    max_steps: int = 500_000
-    start: Path | str | None = None
-    """Where robots start: ``"packed"`` (a block against the seeds), ``"scatter"`` (random free
-    cells, as None), or a CSV of start cells (columns x,y)."""
-    fit: str | None = None
-    """"agents": size the shape to the robots (as many cells as there are robots, or fewer)."""
-    speed_variation: float = 0.0
-    """Each robot's top speed is ``max_speed`` times a factor drawn from ``[1 - this, 1]``."""
-    sense_radius: float = Senses.radius
-    """Local programs: how far, in cells, a robot senses and hears its neighbours."""
-    distance_noise: float = Senses.distance_noise
-    msg_loss: float = Senses.msg_loss
-    faults: tuple[FaultEvent, ...] = ()
-    """Fault events: robots removed or stalled at given steps (see `swarmshape.core.faults`)."""
-    failure_rate: float = 0.0
-    """Chance per robot per step that it fails and is removed."""
-
-    def __post_init__(self) -> None:
-        if self.seed is not None and not 0 <= self.seed < 2**63:
-            raise InputError(f"--seed must be a whole number from 0 to 2**63 - 1, got {self.seed}")
-        if self.order not in ORDERS:
-            raise InputError(f"unknown order {self.order!r}; choose one of {', '.join(ORDERS)}")
-        if self.max_steps < 0:
-            raise InputError(f"--max-steps must be 0 or more, got {self.max_steps}")
-        if self.fit not in FITS:
-            raise InputError(f"unknown --fit {self.fit!r}; choose {', '.join(map(str, FITS[1:]))}")
-        if self.fit == "agents" and self.agents is None:
-            raise InputError("--fit agents sizes the shape to --agents N; give that number")
-        object.__setattr__(self, "start", start_of(self.start))
-        Limits(self.max_speed, self.max_accel)  # checks them
-        Params(speed_variation=self.speed_variation)
-        self.senses()
-        object.__setattr__(self, "faults", events_from_values(self.faults, "faults"))
-        object.__setattr__(self, "failure_rate", check_rate(self.failure_rate))
-
-    def senses(self) -> Senses:
-        """How well a local program's robots sense and talk."""
-        return Senses(self.sense_radius, self.distance_noise, self.msg_loss)
-
-    @property
-    def shape_path(self) -> Path:
-        return self.shape if self.shape is not None else bundled_shapes() / DEFAULT_SHAPE
-
-    def values(self) -> dict[str, Any]:
-        """This description as plain values (paths as text, the arena as a list)."""
-        plain = dataclasses.asdict(self)
-        for name in ("shape", "start"):
-            plain[name] = None if plain[name] is None else str(plain[name])
-        plain["arena"] = None if self.arena is None else list(self.arena)
-        plain["faults"] = [event.values() for event in self.faults]
-        return plain
-
-    @classmethod
-    def from_values(cls, values: Mapping[str, Any], source: str) -> RunConfig:
-        """A description from plain values (a saved run's), each checked for its type."""
-        unknown = sorted(set(values) - set(KINDS))
-        if unknown:
-            raise InputError(f"{source}: unknown run setting {unknown[0]!r}")
-        unset = sorted(name for name, value in values.items() if value is None)
-        unset = [name for name in unset if name not in NULLABLE]
-        if unset:
-            raise InputError(f"{source}: {unset[0]} must have a value, got none")
-        checked = {
-            name: _typed(value, KINDS[name], f"{source}: {name}") for name, value in values.items()
-        }
-        return cls(**checked)
-
-    def seeded(self) -> RunConfig:
-        """This description with a concrete seed (a fresh one if it had none)."""
-        if self.seed is not None:
-            return self
-        return dataclasses.replace(self, seed=int(np.random.SeedSequence().generate_state(1)[0]))
-
-
-FITS = (None, "agents")
-
-NULLABLE = {field.name for field in dataclasses.fields(RunConfig) if field.default is None}
-"""Settings that may be None (unset); for the others None is a damaged value."""
-
-KINDS = {"shape": Path, "strategy": str, "order": str, "seed": int, "agents": int, "cells": int,
-         "threshold": float, "invert": bool, "arena": tuple, "max_speed": float, "max_accel": float,
-         "max_steps": int, "start": Path, "fit": str, "speed_variation": float,
-         "sense_radius": float, "distance_noise": float, "msg_loss": float, "faults": list,
-         "failure_rate": float}  # fmt: skip
-"""The kind of value each `RunConfig` field takes (None is allowed where the default is None)."""
-
-
-def _typed(value: Any, kind: type, where: str) -> Any:
-    """`value` as `kind`, or a one-line error: plain values may come from any file."""
-    if value is None:
-        return None
-    if kind is Path and isinstance(value, str) and value in START_LAYOUTS:
-        return value
-    if kind is Path and isinstance(value, str | Path):
-        return Path(value)
-    if kind is tuple:
-        pair = isinstance(value, list | tuple) and len(value) == 2
-        if pair and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            return (value[0], value[1])
-        raise InputError(f"{where} must be two whole numbers [width, height], got {value!r}")
-    if kind is list:
-        return events_from_values(value, where)
-    if kind is float and isinstance(value, int) and not isinstance(value, bool):
-        return float(value)
-    if isinstance(value, kind) and (kind is bool or not isinstance(value, bool)):
-        return value
-    raise InputError(f"{where} must be {kind.__name__}, got {value!r}")
-
-
-def start_of(value: str | Path | None) -> str | Path | None:
-    """A start layout by name, or the path of a CSV of start cells (text naming a ``.csv``
-    or an existing file is one); a misspelt name is one clear error."""
-    if value is None or isinstance(value, Path) or value in START_LAYOUTS:
-        return value
-    if Path(value).suffix.lower() == ".csv" or Path(value).exists():
-        return Path(value)
-    raise InputError(f"unknown --start {value!r}; choose {', '.join(START_LAYOUTS)} or a CSV file")
-
-
-def configure(shape: str | Path | None = None, **given: Any) -> RunConfig:
-    """A complete description: `RunConfig`'s defaults, overridden by the settings of a scenario
-    file, overridden by `given` (options left at None count as not given), with a seed."""
-    path = None if shape is None else Path(shape)
-    from_file = {} if path is None else scenario_settings(path)
-    try:
-        RunConfig(shape=path, **from_file)
-    except InputError as error:  # say which file holds the value
-        raise InputError(f"{path}: {error}") from None
-    chosen = {key: value for key, value in given.items() if value is not None}
-    unknown = sorted(set(chosen) - {f.name for f in dataclasses.fields(RunConfig)})
-    if unknown:
-        raise InputError(f"unknown run option {unknown[0]!r}")
-    return RunConfig(shape=path, **{**from_file, **chosen}).seeded()
+from swarmshape.io.scenario import ImageOptions, load_scenario, read_start_cells
 
 
 def registered_strategy(name: str) -> None:
@@ -204,14 +39,6 @@ def registered_strategy(name: str) -> None:
     if strategies.is_code(name):
         raise InputError(f"strategy {name!r} points at code; name a registered or installed one")
     strategies.get(name)
-
-
-def bundled_shapes() -> Path:
-    """The shipped shapes: inside an installed wheel, or the source checkout's shapes/."""
-    installed = resources.files("swarmshape") / "shapes"
-    if installed.is_dir():
-        return Path(str(installed))
-    return Path(__file__).resolve().parents[2] / "shapes"
 
 
 def load_world(config: RunConfig) -> World:
@@ -224,13 +51,11 @@ def load_world(config: RunConfig) -> World:
         if len(specs) > 1:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
         specs[0] = dataclasses.replace(specs[0], agents=config.agents)
-    grows = not strategies.is_code(config.strategy) and getattr(
-        strategies.get(config.strategy), "grows_from_seeds", False
-    )  # user code is loaded once, when the run starts
+    grows = strategies.get(config.strategy).grows_from_seeds
     if grows:
         specs = [dataclasses.replace(spec, shape=spec.shape.seeded()) for spec in specs]
     packed = config.start == "packed"
-    world = build_world(specs, config.arena or scenario.arena, scenario.name, packed)
+    world = build_world(specs, config.arena, scenario.name, packed)
     cells = len(world.targets)
     if world.agents > 1.5 * cells and config.fit is None:
         warnings.warn(
@@ -279,18 +104,14 @@ def start_swarm(
     config: RunConfig,
     world: World,
     start: np.ndarray | None = None,
-    plugin: Strategy | Program | None = None,
+    plugin: Plugin | None = None,
 ) -> Swarm:
     """A swarm on a given world (a painted one, say), run as `config` says, by `plugin` if
     given (a plug-in object made elsewhere: the learning environment's relay of a trainer's
     actions) instead of a new `config.strategy`."""
-    strategy = plugin or strategies.create(
-        config.strategy, order=config.order, senses=config.senses()
-    )
-    limits = Limits(config.max_speed, config.max_accel)
-    params = Params(limits=limits, speed_variation=config.speed_variation)
+    plugin = plugin or strategies.create(config.strategy, plugin_options(config))
     faults = Faults(config.faults, config.failure_rate)
-    return Swarm(world, strategy, config.seeded().seed, params, start, faults)
+    return Swarm(world, plugin, config.seeded().seed, config.params(), start, faults)
 
 
 def save(swarm: Swarm, path: Path, config: RunConfig) -> None:
@@ -317,7 +138,7 @@ def resume(path: Path, strategy: str | None = None) -> tuple[RunConfig, Swarm]:
             f"{path}: was saved with the strategy {config.strategy}, which is code; a state file "
             f"never loads code, so name it again to resume: --strategy {config.strategy}"
         )
-    plugin = strategies.create(config.strategy, order=config.order, senses=config.senses())
+    plugin = strategies.create(config.strategy, plugin_options(config))
     return config, Swarm.restored(saved.part("swarm"), plugin)
 
 

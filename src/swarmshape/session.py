@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmshape.config import RunConfig
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
 from swarmshape.core.swarm import Swarm
@@ -25,16 +26,7 @@ from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
 from swarmshape.io.files import check_output, distinct_outputs, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour
-from swarmshape.runs import (
-    Observer,
-    RunConfig,
-    Runner,
-    load_world,
-    resume,
-    save,
-    start_cells,
-    start_swarm,
-)
+from swarmshape.runs import Observer, Runner, load_world, resume, save, start_cells, start_swarm
 
 OUTPUT_OPTIONS = ("metrics", "record", "frames", "trace", "save_state", "positions")
 
@@ -152,7 +144,8 @@ class Session:
     ) -> Swarm | None:
         from swarmshape.ui.viewer import Viewer  # pygame only when a window is wanted
 
-        say(f"seed {config.seed}")
+        if not self.editing:  # the editor runs nothing until a shape is handed over
+            say(f"seed {config.seed}")
         viewer = Viewer(
             make_swarm,
             world,
@@ -163,10 +156,7 @@ class Session:
             observers=observers,
             max_steps=config.max_steps,
         )
-        viewer.run()
-        if viewer.swarm is not None:
-            for observer in observers:
-                observer.close(viewer.swarm)
+        viewer.run()  # closes the observers, as `Runner.finish` does
         return viewer.swarm
 
 

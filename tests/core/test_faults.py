@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from swarmshape.check import InvariantWatch
+from swarmshape.config import configure
 from swarmshape.core.faults import (
     FaultError,
     FaultEvent,
@@ -23,7 +24,7 @@ from swarmshape.core.states import LOST, SETTLED, STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.io.scenario import load_scenario
-from swarmshape.runs import Runner, configure, load_world, resume, save, start_cells, start_swarm
+from swarmshape.runs import Runner, load_world, resume, save, start_cells, start_swarm
 from swarmshape.strategies import available, create
 from tests.conftest import SHAPES, grid_from, world_of
 

@@ -121,7 +121,7 @@ def test_too_few_agents_form_a_smaller_copy(name, strategy):
 
 def test_two_groups_form_at_the_same_time_with_two_movers():
     scenario = load_scenario(SHAPES / "two-squares.toml")
-    world = build_world(list(scenario.groups), scenario.arena)
+    world = build_world(list(scenario.groups))
     swarm = Swarm(world, create("paper"), seed=4)
     most_movers = 0
     while not swarm.complete and swarm.step_count < 100_000:

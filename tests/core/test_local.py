@@ -10,10 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmshape.core.local import Memory, Program, ProgramError, Slot, _link_up
+from swarmshape.core.local import Memory, Program, ProgramError, Schema, Slot, _link_up
 from swarmshape.core.perception import Perception, Senses, neighbours
 from swarmshape.core.shape import Pose, Shape
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import run
 
@@ -82,6 +82,36 @@ def test_a_move_into_a_taken_cell_does_not_happen_and_odometry_says_so():
     assert (swarm.driver.memory.went == swarm.cell[:, 0] - start[:, 0]).all()
 
 
+class EastThenSouth(Program):
+    """East until the robot has gone (or is on its way to) 10 cells, then south: asked to
+    turn while under way, it must brake and stop first."""
+
+    name = "east-then-south"
+    description = "test: a turn"
+    memory: ClassVar[dict[str, Slot]] = {"went": Slot(np.int64, 0)}
+
+    def act(self, sense: Perception, memory: Memory, rng: np.random.Generator):
+        memory.went += np.abs(sense.moved).sum(axis=1)
+        committed = memory.went + (sense.heading > 0)  # the cell reserved ahead is coming
+        return np.where(committed < 10, 1, 3), np.zeros((len(sense), 0), dtype=np.int64)
+
+
+def test_a_robot_that_keeps_choosing_its_way_cruises_and_stops_only_to_turn():
+    world = world_of(np.ones((1, 1), dtype=bool), 1, arena=(40, 30))
+    swarm = Swarm(world, EastThenSouth(), seed=1, start=np.array([[6, 10]]))
+    stops, speeds = 0, []
+    for _ in range(60):
+        swarm.step()
+        speeds.append(float(swarm.speed[0]))
+        stops += swarm.ahead[0] == 0
+    assert swarm.cell[0, 0] == 16, "east ten cells, then only south"
+    top = swarm.params.limits.max_speed
+    east = speeds[: speeds.index(0.0)]
+    assert east.count(top) >= 14, "ten cells at top speed but for speeding up and braking"
+    assert 0.0 not in speeds[3 : len(east)], "no stop on the way east"
+    assert swarm.cell[0, 1] > 15 and swarm.overlap_total == 0
+
+
 def test_a_program_returning_nonsense_is_one_clear_error():
     class Wild(East):
         name = "wild"
@@ -96,11 +126,10 @@ def test_a_program_returning_nonsense_is_one_clear_error():
 
 def test_a_lost_link_is_lost_both_ways():
     world = world_of(np.ones((3, 4), dtype=bool), 12)
-    program = Drift(Senses(msg_loss=0.5))
-    swarm = Swarm(world, program, seed=3)
+    swarm = Swarm(world, Drift(), seed=3, params=Params(senses=Senses(msg_loss=0.5)))
     sense = swarm.driver.perceive()
     _, owner, other = neighbours(
-        swarm.cell, swarm.world.seeds, swarm.world.size, program.senses.reach()
+        swarm.cell, swarm.world.seeds, swarm.world.size, swarm.params.senses.reach()
     )
     heard = {(int(a), int(b)): bool(h) for a, b, h in zip(owner, other, sense.heard, strict=True)}
     links = [(a, b) for (a, b) in heard if b < len(swarm.cell)]
@@ -154,10 +183,21 @@ def test_a_translated_scenario_runs_the_same_translated(dx, dy, turns, seed, noi
         moved = Pose(pose.x + shift[0], pose.y + shift[1], pose.rotation)
         world = world_of(grid, 12, moved, arena=(80 + dx, 80 + dy))
         start = np.argwhere(np.ones((3, 4), dtype=bool)) + np.array([42, 42]) + shift
-        swarm = Swarm(world, Drift(senses), seed=seed, start=start)
+        swarm = Swarm(world, Drift(), seed, Params(senses=senses), start)
         trail = []
         for _ in range(WALL_FREE_STEPS):
             swarm.step()
             trail.append(np.column_stack([swarm.cell - shift, swarm.direction, swarm.offset]))
         runs.append(np.array(trail))
     assert np.array_equal(runs[0], runs[1])
+
+
+def test_a_message_schema_packs_and_reads_fields_by_name():
+    schema = Schema(state=1, position=2, hops=1)
+    assert len(schema) == 4
+    message = schema.pack(state=[1, 2], position=[[3, 4], [5, 6]], hops=np.array([7, 8]))
+    assert message.dtype == np.int64 and message.tolist() == [[1, 3, 4, 7], [2, 5, 6, 8]]
+    fields = schema.read(message)
+    assert fields.state.tolist() == [1, 2] and fields.position.tolist() == [[3, 4], [5, 6]]
+    with pytest.raises(TypeError, match="exactly the fields state, position, hops"):
+        schema.pack(state=[1], position=[[0, 0]])

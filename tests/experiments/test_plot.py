@@ -12,7 +12,7 @@ import matplotlib
 import pytest
 
 from swarmshape.cli import main
-from swarmshape.experiments.plot import plot_results
+from swarmshape.experiments.plot import MARKERS, draw_plots, plot_results, read_runs
 from swarmshape.experiments.sweep import read_sweep, sweep
 from tests.conftest import SHAPES
 
@@ -138,19 +138,48 @@ def test_plots_into_a_file_are_one_clear_line(results, tmp_path, capsys):
     assert len(err) == 1 and "taken: cannot make the folder for the plots" in err[0], err
 
 
-def test_coverage_is_drawn_per_strategy_and_robot_count(results, tmp_path, monkeypatch):
+def looks(axes) -> list[tuple]:
+    """Colour, line style and marker of each line drawn for a setting (not error bar caps)."""
+    return [
+        (line.get_color(), line.get_linestyle(), line.get_marker())
+        for line in axes.get_lines()
+        if line.get_marker() in MARKERS
+    ]
+
+
+def drawn(path, name):
+    """A plot's figure, drawn, its panels that hold lines, and its legends' texts."""
+    figure = draw_plots(read_runs(path))[name]
+    figure.canvas.draw()
+    panels = [axes for axes in figure.axes if axes.get_lines()]
+    texts = [text.get_text() for legend in figure.legends for text in legend.get_texts()]
+    return figure, panels, texts
+
+
+def assert_legends_outside_the_panels(figure) -> None:
+    assert figure.legends
+    for legend in figure.legends:
+        for axes in figure.axes:
+            assert not legend.get_window_extent().overlaps(axes.get_window_extent())
+
+
+def test_coverage_tells_every_strategy_and_robot_count_apart(results, tmp_path, monkeypatch):
+    figure, (panel,) = drawn(results, "coverage")[:2]
+    assert len(looks(panel)) == 4 and len(set(looks(panel))) == 4
+    assert len({colour for colour, _, _ in looks(panel)}) == 2, "a colour per strategy"
+    assert len({look[1:] for look in looks(panel)}) == 2, "a style per robot count"
+    assert_legends_outside_the_panels(figure)
     monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
     plot_results(results, tmp_path, ("svg",))
-    assert sorted(t for t in legend(tmp_path / "coverage.svg") if "robots" in t) == [
-        "greedy, 16 robots (2 runs)",
-        "greedy, 20 robots (2 runs)",
-        "optimal, 16 robots (2 runs)",
-        "optimal, 20 robots (2 runs)",
-    ]
+    texts = legend(tmp_path / "coverage.svg")
+    assert {"strategy", "greedy", "optimal", "robots", "16 robots", "20 robots"} <= set(texts)
+    assert "Coverage over time, mean over seeds (2 runs each)" in texts
     assert {"greedy", "optimal"} <= set(legend(tmp_path / "steps.svg"))
 
 
-def test_several_shapes_are_told_apart(tmp_path, monkeypatch):
+def test_several_shapes_get_a_panel_each_and_single_points_differ_in_marker(tmp_path):
+    """With one robot per cell each shape has one robot count, so in steps.png every setting
+    is a single point: colour alone, or line style, could not tell them apart."""
     sweep_file = tmp_path / "two.toml"
     sweep_file.write_text(
         TINY.replace('"]', f'", "{SHAPES / "small-square.png"}"]', 1)
@@ -158,15 +187,18 @@ def test_several_shapes_are_told_apart(tmp_path, monkeypatch):
         .replace('["optimal", "greedy"]', '"optimal"')
     )
     sweep(read_sweep(sweep_file), tmp_path / "two.csv", tmp_path, workers=2)
-    monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
-    plot_results(tmp_path / "two.csv", tmp_path, ("svg",))
-    labels = sorted(t for t in legend(tmp_path / "coverage.svg") if "robots" in t)
-    assert labels == [
-        "line.png, optimal, max_speed 0.5, 16 robots (2 runs)",
-        "line.png, optimal, max_speed 1.0, 16 robots (2 runs)",
-        "small-square.png, optimal, max_speed 0.5, 36 robots (2 runs)",
-        "small-square.png, optimal, max_speed 1.0, 36 robots (2 runs)",
-    ]
+    figure, panels, texts = drawn(tmp_path / "two.csv", "coverage")
+    assert [axes.get_title() for axes in panels] == ["line.png, 16 robots",
+                                                     "small-square.png, 36 robots"]  # fmt: skip
+    assert {"max_speed 0.5", "max_speed 1.0"} <= set(texts)
+    assert all(len(set(looks(axes))) == 2 for axes in panels)
+    assert_legends_outside_the_panels(figure)
+    figure, panels, texts = drawn(tmp_path / "two.csv", "steps")
+    assert [axes.get_title() for axes in panels] == ["line.png", "small-square.png"]
+    for axes in panels:
+        assert len(looks(axes)) == 2 and len({marker for *_, marker in looks(axes)}) == 2
+    assert {"max_speed 0.5", "max_speed 1.0"} <= set(texts)
+    assert_legends_outside_the_panels(figure)
 
 
 def test_a_dollar_in_a_setting_is_drawn_as_it_is(results, tmp_path, monkeypatch):
@@ -181,4 +213,4 @@ def test_a_dollar_in_a_setting_is_drawn_as_it_is(results, tmp_path, monkeypatch)
     monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
     plot_results(tmp_path / "dollar.csv", tmp_path / "plots", ("svg",))
     labels = legend(tmp_path / "plots" / "coverage.svg")
-    assert r"$\frac{1}{0$, 16 robots (2 runs)" in labels
+    assert r"$\frac{1}{0$" in labels

@@ -63,20 +63,28 @@ def test_a_sweep_over_the_cap_is_refused_saying_how_many_runs_it_asks_for(tmp_pa
         ("agents = []", "agents is an empty list; give it at least one value"),
         ("agents = [10, 10]", "agents lists 10 twice"),
         ("agents = {a = 1}", "agents must be a whole number"),
-        ("max_speed = 'fast'", "max_speed must be a number, or a list of them; got 'fast'"),
-        ("max_speed = 3", "max speed must be in [0.001, 1] cells per step, got 3"),
-        ("max_speed = 0.25\nmax_accel = 0.5", "max acceleration must be in [0.001, max speed]"),
-        ("cells = 0", "cells must be a whole number of at least 1"),
-        ("msg_loss = [0, 1]", "msg_loss must be a number that --msg-loss takes, or a list of "
-         "them; got 1"),
-        ("distance_noise = 'some'", "distance_noise must be a number that --distance-noise"),
-        ("sense_radius = 0.5", "sense_radius must be a number that --sense-radius takes"),
+        ("max_speed = 'fast'", "max_speed must be a number from 0.001 to 1, or a list of them; "
+         "got 'fast'"),
+        ("max_speed = 3", "max_speed must be a number from 0.001 to 1, or a list of them; got 3"),
+        ("max_speed = 0.25\nmax_accel = 0.5", "max_accel must be at most max_speed (0.25), "
+         "got 0.5"),
+        ("cells = 0", "cells must be a whole number of 1 or more"),
+        ("msg_loss = [0, 1]", "msg_loss must be a number from 0 up to (not including) 1, or a "
+         "list of them; got 1"),
+        ("distance_noise = 'some'", "distance_noise must be a number from 0 to 1"),
+        ("sense_radius = 0.5", "sense_radius must be a number from 1 to 16"),
+        ("arena = [30, 0]", "arena must be two whole numbers of 1 or more"),
         ("speed_variation = true", "speed_variation must be a number"),
         ("curve_every = -2", "curve_every must be a whole number of at least 1, or a list of "
          "them; got -2"),
         ("curve_every = 0", "curve_every must be a whole number of at least 1"),
-        ("order = 'nope'", "unknown order 'nope'; choose one of outward"),
-        ("order = 3", "order must be a fill order, or a list of them; got 3"),
+        ("order = 'random'", "unknown key 'order' (order is an option of paper: write "
+         "options.order)"),
+        ("options.order = 'nope'", "order is an option of paper, not of optimal"),
+        ("strategies = ['paper']\noptions.order = 'nope'", "order must be one of outward, "
+         "left-to-right, random, got 'nope'"),
+        ("strategies = ['paper']\noptions.order = [3]", "order must be one of outward"),
+        ("options = 3", "options must be a table: options.NAME = [values]"),
         ("max_steps = -1", "max_steps must be a whole number of 0 or more"),
         ("max_steps = 1.5", "max_steps must be a whole number of 0 or more"),
         ("seeds = [-1]", "seeds must be a count of at least 1, or a list of seeds from 0 to "
@@ -91,7 +99,8 @@ def test_a_sweep_over_the_cap_is_refused_saying_how_many_runs_it_asks_for(tmp_pa
 def test_every_value_is_checked_before_any_run_naming_the_file_and_the_key(
     tmp_path, extra, message
 ):
-    path = sweep_file(tmp_path, LINE + extra.replace("2**63", str(2**63)))
+    base = LINE.replace("strategies = ['optimal']\n", "") if "strategies" in extra else LINE
+    path = sweep_file(tmp_path, base + extra.replace("2**63", str(2**63)))
     with pytest.raises(InputError) as error:
         read_sweep(path)
     assert str(error.value).startswith(f"{path}: ")
@@ -134,7 +143,6 @@ def test_good_values_make_every_combination_once_per_seed(tmp_path):
         "curve_every": 5,
         "max_speed": 0.5,
         "max_steps": 500_000,
-        "order": "outward",
         "shape": str(SHAPES / "line.png"),
         "strategy": "optimal",
         "seed": 7,

@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 
 from swarmshape.cli import main
+from swarmshape.config import configure
 from swarmshape.core.metrics import run_metrics
 from swarmshape.errors import InputError
 from swarmshape.io.checkpoint import PICKLE_HEADER, load_state
-from swarmshape.runs import build, configure, resume, run, save
+from swarmshape.runs import build, resume, run, save
 from swarmshape.strategies import available
 from tests.conftest import SHAPES
 

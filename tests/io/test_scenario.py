@@ -2,10 +2,10 @@ from __future__ import annotations
 
 import pytest
 
+from swarmshape.config import configure
 from swarmshape.core.shape import Pose
 from swarmshape.errors import InputError
 from swarmshape.io.scenario import load_scenario, scenario_settings
-from swarmshape.runs import configure
 from tests.conftest import SHAPES
 
 
@@ -41,7 +41,9 @@ def write(tmp_path, text):
         ("[[groups]]\nshape = 'line.png'\ncolour = 'rgb(999,999,999)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'hsl(999, 999%, 999%)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\npose = {x = 1, z = 2}\n", "unknown key 'z'"),
-        ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "two integers"),
+        ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "arena must be two whole numbers"),
+        ("order = 'random'\n[[groups]]\nshape = 'line.png'\n", "order is an option of paper"),
+        ("[options]\norder = 'random'\n[[groups]]\nshape = 'line.png'\n", "not of optimal"),
         ("max_speed = 'fast'\n[[groups]]\nshape = 'line.png'\n", "max_speed must be"),
         ("msg_loss = 'often'\n[[groups]]\nshape = 'line.png'\n", "msg_loss must be"),
         ("[[groups]]\nshape = 'missing.png'\n", "no such file"),
@@ -50,7 +52,7 @@ def write(tmp_path, text):
 def test_bad_scenarios_name_the_file_and_the_key(tmp_path, text, message):
     path = write(tmp_path, text)
     with pytest.raises(InputError, match=message):
-        load_scenario(path)
+        load_scenario(configure(path).shape)
 
 
 def test_noise_settings_reach_the_run_and_a_bad_one_names_the_file(tmp_path):
@@ -58,7 +60,7 @@ def test_noise_settings_reach_the_run_and_a_bad_one_names_the_file(tmp_path):
     config = configure(path, seed=1)
     assert (config.msg_loss, config.distance_noise) == (0.3, 0.0)
     path = write(tmp_path, "sense_radius = 40\n[[groups]]\nshape = 'line.png'\n")
-    with pytest.raises(InputError, match=f"^{path}: --sense-radius must be from 1 to 16"):
+    with pytest.raises(InputError, match=f"^{path}: sense_radius must be a number from 1 to 16"):
         configure(path)
 
 

@@ -7,9 +7,10 @@ import numpy as np
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+from swarmshape.config import configure
 from swarmshape.core.local import Memory
 from swarmshape.core.perception import Blueprint, Perception
-from swarmshape.runs import build, configure, run
+from swarmshape.runs import build, run
 from swarmshape.strategies import local_swap
 from tests.conftest import SHAPES
 
@@ -71,10 +72,11 @@ def test_robots_at_rest_that_want_trades_always_agree_one(robots):
     yes = np.ones(len(owner), dtype=bool)
     sense = Perception(
         number=np.arange(n), group=np.zeros(n, dtype=np.int64), ready=np.ones(n, dtype=bool),
+        heading=np.zeros(n, dtype=np.int64), cruising=np.zeros(n, dtype=bool), progress=np.zeros(n),
         moved=np.zeros((n, 2), dtype=np.int64), start=np.arange(0, n * (n - 1) + 1, n - 1),
         owner=owner, offset=(cells[other] - cells[owner]).astype(float), seed=~yes, kin=yes,
         heard=yes, message=message, seed_frame=np.zeros((len(owner), 2), dtype=np.int64),
-        blueprint=Blueprint.of([goals]), step=1,
+        blueprint=Blueprint.of([goals]), step=1, radius=3.0,
     )  # fmt: skip
     nobody = np.zeros(0, dtype=np.int64)
     wants = local_swap._choose_partner(

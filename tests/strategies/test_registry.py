@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from swarmshape import strategies
+from swarmshape.config import configure, plugin_options
 from swarmshape.core.local import Program
 from swarmshape.core.motion import Motion
 from swarmshape.core.swarm import Swarm
-from swarmshape.errors import InputError
+from swarmshape.errors import InputError, SettingError
 from swarmshape.runs import run
-from tests.conftest import grid_from, make_swarm
+from tests.conftest import SHAPES, grid_from, make_swarm
 
 SHAPE = grid_from("""
 ###.
@@ -77,9 +78,13 @@ def test_bad_strategy_names_are_clear(name, message):
         strategies.get(name)
 
 
-def test_options_go_only_to_strategies_that_take_them():
-    assert strategies.create("paper", order="random").order == "random"
-    assert strategies.create("optimal", order="random").motion is Motion.SWAP
+def test_a_plug_in_gets_its_own_options_and_no_other():
+    paper = configure(SHAPES / "square.png", strategy="paper", options={"order": "random"})
+    assert strategies.create("paper", plugin_options(paper)).options.order == "random"
+    with pytest.raises(SettingError, match="order is an option of paper, not of optimal"):
+        configure(SHAPES / "square.png", strategy="optimal", options={"order": "random"})
+    with pytest.raises(SettingError, match="orde is not an option of paper; paper takes order"):
+        configure(SHAPES / "square.png", strategy="paper", options={"orde": "random"})
 
 
 def test_every_builtin_has_a_description_and_a_mode():

@@ -9,10 +9,11 @@ import warnings
 import numpy as np
 import pytest
 
+from swarmshape.config import configure
 from swarmshape.core.metrics import run_metrics
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import ShapeWarning
-from swarmshape.runs import Runner, build, configure, run
+from swarmshape.runs import Runner, build, run
 from swarmshape.strategies.self_assembly import JOINED, WAIT, SelfAssembly
 from tests.conftest import SHAPES
 
@@ -93,7 +94,9 @@ def test_the_packed_start_is_a_block_against_the_seeds():
 
 
 def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_path):
-    with pytest.raises(InputError, match="unknown --start 'pakced'"):
+    with pytest.raises(
+        InputError, match="start must be packed, scatter or a CSV file of start cells, got 'pakced'"
+    ):
         configure(SHAPES / "square.png", start="pakced")
     cells = tmp_path / "start.csv"  # as the environment and scripts pass it
     assert configure(SHAPES / "square.png", start=str(cells)).start == cells

@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
+import sys
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pygame
 import pytest
 from PIL import Image
 
+from swarmshape.config import bundled_shapes
 from swarmshape.core.shape import Pose
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import blank_world
 from swarmshape.io.bitmap import load_grid
 from swarmshape.strategies import create
-from swarmshape.ui.editor import HELP_LINES, HISTORY, PAINT, Canvas
+from swarmshape.ui.editor import HELP_LINES, HISTORY, PAINT, Canvas, data_folder
 from swarmshape.ui.render import FLOOR, SEED_GREEN
 from swarmshape.ui.viewer import Viewer
 from tests.conftest import grid_from, world_of
@@ -320,17 +323,65 @@ def test_autosave_never_overwrites_a_file(blank, tmp_path, capsys):
     assert str(kept) in capsys.readouterr().err
 
 
-def test_autosave_falls_back_to_the_temporary_folder(tmp_path, monkeypatch, capsys):
-    spare = tmp_path / "tmp"
-    spare.mkdir()
-    monkeypatch.setattr(tempfile, "tempdir", str(spare))
-    view = editor_on(tmp_path / "gone" / "drawn.png")  # a folder that is not there
+def quit_with_a_stroke(view: Viewer) -> None:
     drag(view, (8, 8), (8, 12))
     pygame.event.post(pygame.event.Event(pygame.QUIT))
     view.tick()
-    assert load_grid(spare / "drawn.autosave.png").sum() == 5
-    assert "kept in" in capsys.readouterr().err
     pygame.quit()
+
+
+def test_autosave_falls_back_to_the_data_folder_then_the_temporary_one(
+    tmp_path, monkeypatch, capsys, data_home
+):
+    spare = tmp_path / "tmp"
+    spare.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(spare))
+    quit_with_a_stroke(editor_on(tmp_path / "gone" / "drawn.png"))  # a folder not there
+    assert load_grid(data_home / "swarmshape" / "autosaves" / "drawn.autosave.png").sum() == 5
+    assert "kept in" in capsys.readouterr().err and not (tmp_path / "gone").exists()
+    (data_home / "swarmshape").rename(data_home / "elsewhere")
+    (data_home / "swarmshape").write_text("a file where the folder should be")
+    quit_with_a_stroke(editor_on(tmp_path / "gone" / "drawn.png"))
+    assert load_grid(spare / "drawn.autosave.png").sum() == 5
+
+
+@pytest.mark.parametrize("where", ["shipped", "untitled"])
+def test_autosave_of_a_shipped_shape_or_an_untitled_drawing_goes_to_the_data_folder(
+    where, data_home, capsys
+):
+    """Never into the shapes that come with swarmshape (an update replaces them), nor into
+    whatever folder the editor happened to be started from."""
+    shipped = bundled_shapes() / "square.png"
+    before = sorted(bundled_shapes().iterdir())
+    view = Viewer(
+        paper,
+        world_of(np.ones((3, 3), dtype=bool)),
+        title="square.png",
+        start=False,
+        shape_file=shipped if where == "shipped" else None,
+        size=(640, 480),
+        fps=0,
+    )
+    quit_with_a_stroke(view)
+    name = "square.autosave.png" if where == "shipped" else "untitled.autosave.png"
+    kept = data_home / "swarmshape" / "autosaves" / name
+    assert kept.exists() and str(kept) in capsys.readouterr().err
+    assert sorted(bundled_shapes().iterdir()) == before
+
+
+def test_the_data_folder_follows_xdg_and_ignores_a_relative_setting(monkeypatch, tmp_path):
+    monkeypatch.setattr(sys, "platform", "linux")
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    assert data_folder() == tmp_path / "swarmshape"
+    monkeypatch.setenv("XDG_DATA_HOME", "relative/path")
+    assert data_folder() == Path.home() / ".local" / "share" / "swarmshape"
+    monkeypatch.delenv("XDG_DATA_HOME")
+    assert data_folder() == Path.home() / ".local" / "share" / "swarmshape"
+    monkeypatch.setattr(sys, "platform", "darwin")
+    assert data_folder() == Path.home() / "Library" / "Application Support" / "swarmshape"
+    monkeypatch.setattr(sys, "platform", "win32")
+    monkeypatch.setenv("LOCALAPPDATA", str(tmp_path / "local"))
+    assert data_folder() == tmp_path / "local" / "swarmshape"
 
 
 # --- no surprises -----------------------------------------------------------------------

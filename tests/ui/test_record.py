@@ -65,3 +65,51 @@ def test_a_frames_folder_named_by_a_dangling_link_is_made_at_its_target(tmp_path
         == 3
     )
     assert link.is_symlink() and len(list((tmp_path / "real").glob("frame-*.png"))) == 3
+
+
+def decoded(path) -> list[np.ndarray]:
+    """Every frame of a video, as RGB arrays."""
+    import imageio_ffmpeg
+
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = reader.__next__()
+    width, height = meta["size"]
+    return [np.frombuffer(raw, np.uint8).reshape(height, width, 3) for raw in reader]
+
+
+def test_an_mp4_holds_the_frames_a_gif_holds(tmp_path):
+    from swarmshape.cli import main
+
+    common = [str(SHAPES / "line.png"), "--headless", "--seed", "1", "--record-every", "4"]
+    assert main([*common, "--record", str(tmp_path / "run.gif")]) == 0
+    assert main([*common, "--record", str(tmp_path / "run.mp4")]) == 0
+    with Image.open(tmp_path / "run.gif") as gif:
+        first = np.asarray(gif.convert("RGB"))
+        count = gif.n_frames
+    video = decoded(tmp_path / "run.mp4")
+    assert len(video) == count > 2 and video[0].shape == (400, 640, 3)
+    assert np.abs(video[0].astype(int) - first).mean() < 3, "the same picture, lossily kept"
+    assert not np.array_equal(video[0], video[-1])
+
+
+def test_an_mp4_of_odd_size_is_padded_to_even_sides(tmp_path):
+    swarm = make_swarm(SHAPE, seed=1)
+    recorder = Recorder(tmp_path / "odd.mp4", size=(321, 201))
+    recorder.capture(swarm)
+    swarm.step()
+    recorder.close(swarm)
+    assert [frame.shape for frame in decoded(tmp_path / "odd.mp4")] == [(202, 322, 3)] * 2
+
+
+def test_mp4_without_the_video_extra_is_one_line_before_the_run(tmp_path, monkeypatch, capsys):
+    import sys
+
+    from swarmshape.cli import main
+
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)  # as if not installed
+    out = tmp_path / "run.mp4"
+    assert main([str(SHAPES / "line.png"), "--headless", "--record", str(out)]) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and "pip install 'swarmshape[video]'" in lines[0], lines
+    assert captured.out == "" and not out.exists(), "refused before anything ran"

@@ -4,12 +4,14 @@ from typing import ClassVar
 
 import numpy as np
 import pygame
+import pytest
 
 from swarmshape.core.local import Program, Slot
 from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.states import State
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.strategies import create
 from swarmshape.ui.render import (
     ERROR_RED,
     FLOOR,
@@ -103,7 +105,8 @@ def test_a_local_program_with_states_colours_its_robots_by_state():
     swarm = local_swarm()
     surface, renderer = drawn(swarm)
     assert program_of(swarm).name == "shown" and program_of(make_swarm(SHAPE)) is None
-    assert [name for name, _ in legend(swarm)] == ["first", "second", "third"]
+    names = [key.name for key in legend(swarm)]
+    assert names == ["first", "second", "third", "stalled", "removed", "seed", "empty cell"]
     for robot in range(3):
         rect = renderer.cell_rect(tuple(swarm.cell[robot]), surface.get_rect())
         assert surface.get_at(rect.move(3, 3).topleft)[:3] == PALETTE[robot % 3]
@@ -137,3 +140,31 @@ def test_overlays_ask_nothing_of_a_central_strategy():
     plain, _ = drawn(swarm)
     everything, _ = drawn(swarm, {"values", "links", "error"})
     assert pygame.image.tobytes(plain, "RGB") == pygame.image.tobytes(everything, "RGB")
+
+
+@pytest.mark.parametrize("strategy", ["optimal", "paper", "local-swap", "self-assembly"])
+def test_every_colour_on_the_arena_has_a_key_in_the_legend(strategy):
+    """Seeds, empty cells and every robot's colour, whatever it is doing (spares wander, one is
+    stalled, one removed), under central strategies and local programs alike."""
+    world = build_world([GroupSpec("g", Shape(np.ones((3, 4), dtype=bool)), (200, 60, 60), 16)])
+    swarm = Swarm(world, create(strategy), seed=2)
+    for _ in range(12):
+        swarm.step()
+    swarm.fail(np.array([0]), "stall")
+    swarm.fail(np.array([1]), "remove")
+    surface, renderer = drawn(swarm)
+    keys = legend(swarm)
+    swatches = {colour for key in keys for colour in key.colours}
+    size, origin = renderer.fit(surface.get_rect())
+    empty = ~swarm.filled & ~(swarm.cell[swarm.present][:, None] == world.targets).all(2).any(0)
+    centres = [
+        *swarm.positions()[swarm.present],
+        *(world.seeds + 0.5),
+        *(world.targets[empty] + 0.5),
+    ]
+    for centre in centres:
+        pixel = (np.floor(centre * size) + origin).astype(int)
+        assert surface.get_at(pixel.tolist())[:3] in swatches, (strategy, centre)
+    assert {"stalled", "removed", "seed", "empty cell"} <= {key.name for key in keys}
+    if not program_of(swarm) or not program_of(swarm).states:
+        assert [key.name for key in keys][:4] == ["waiting", "moving", "settled", "wandering"]

@@ -6,10 +6,14 @@ import numpy as np
 import pygame
 import pytest
 
+from swarmshape.core.local import Program
 from swarmshape.core.states import LOST
 from swarmshape.core.swarm import Swarm
+from swarmshape.experiments.trace import Trace
+from swarmshape.runs import Observer, run
 from swarmshape.strategies import create
-from swarmshape.ui.viewer import SPEEDS, Viewer
+from swarmshape.ui.render import legend
+from swarmshape.ui.viewer import GAP, HUD_PAD, SPEEDS, Viewer
 from tests.conftest import grid_from, make_swarm, world_of
 from tests.ui.test_render import Shown
 
@@ -18,17 +22,21 @@ SHAPE = grid_from("""
 """)
 
 
-@pytest.fixture
-def viewer(tmp_path):
-    view = Viewer(
-        lambda world: Swarm(world, create("paper"), 3),
+def window(plugin=lambda: create("paper"), **options) -> Viewer:
+    """A window on `SHAPE`, run by a fresh `plugin` with seed 3."""
+    return Viewer(
+        lambda world: Swarm(world, plugin(), 3),
         world_of(SHAPE),
         title="bar.png",
         size=(640, 400),
         fps=0,
-        screenshots=tmp_path,
+        **options,
     )
-    yield view
+
+
+@pytest.fixture
+def viewer(tmp_path):
+    yield window(screenshots=tmp_path)
     pygame.quit()
 
 
@@ -80,9 +88,16 @@ def test_f12_saves_a_png_of_the_window(viewer, tmp_path):
     assert image.get_size() == viewer.screen.get_size()
 
 
+def resize(view: Viewer, size: tuple[int, int]) -> None:
+    """What a person's drag of the window's edge does: SDL resizes the window (the dummy
+    driver only does so through set_mode), then the window hears of it."""
+    pygame.display.set_mode(size, pygame.RESIZABLE)
+    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=size, w=size[0], h=size[1]))
+    view.tick()
+
+
 def test_window_resizes_and_q_quits(viewer):
-    pygame.event.post(pygame.event.Event(pygame.VIDEORESIZE, size=(500, 300), w=500, h=300))
-    viewer.tick()
+    resize(viewer, (500, 300))
     assert viewer.screen.get_size() == (500, 300)
     press(viewer, pygame.K_q)
     assert not viewer.running
@@ -140,14 +155,7 @@ def test_a_paused_window_waits_for_events(viewer, monkeypatch):
 
 
 def test_the_window_stops_at_max_steps_and_keeps_the_final_swarm(tmp_path):
-    view = Viewer(
-        lambda world: Swarm(world, create("paper"), 3),
-        world_of(SHAPE),
-        title="bar.png",
-        size=(640, 400),
-        fps=0,
-        max_steps=5,
-    )
+    view = window(max_steps=5)
     assert "step 0/5" in view.status()
     for _ in range(4):
         view.tick()
@@ -228,14 +236,7 @@ def test_the_fault_tool_removes_a_clicked_robot_and_a_dragged_rectangle(tmp_path
 def test_g_l_o_toggle_a_local_programs_overlays_and_say_so(viewer, tmp_path):
     press(viewer, pygame.K_g)  # the fixture runs the central `paper` strategy
     assert viewer.overlays == set() and "no local program" in viewer.notice
-    view = Viewer(
-        lambda world: Swarm(world, Shown(), 3),
-        world_of(SHAPE),
-        title="bar.png",
-        size=(640, 400),
-        fps=0,
-        screenshots=tmp_path,
-    )
+    view = window(Shown, screenshots=tmp_path)
     try:
         for key in (pygame.K_g, pygame.K_l, pygame.K_o):
             press(view, key)
@@ -245,3 +246,115 @@ def test_g_l_o_toggle_a_local_programs_overlays_and_say_so(viewer, tmp_path):
         assert view.overlays == {"values", "error"} and view.notice == "links overlay off"
     finally:
         pygame.quit()
+
+
+# --- the window drives a runs.Runner -----------------------------------------------------
+
+
+def test_the_window_feeds_its_observers_as_a_headless_run_does(tmp_path):
+    """The same observers see the same steps, from the swarm before its first step to the
+    formed shape, and are closed when the window closes."""
+    view = window(observers=[Trace(tmp_path / "window.csv")])
+    while not view.idle:
+        view.tick()
+    pygame.event.post(pygame.event.Event(pygame.QUIT))
+    view.run()
+    run(Swarm(world_of(SHAPE), create("paper"), 3), [Trace(tmp_path / "headless.csv")])
+    shown = (tmp_path / "window.csv").read_text()
+    assert shown == (tmp_path / "headless.csv").read_text()
+    assert shown.splitlines()[1].startswith("0,"), "the swarm before its first step"
+
+
+def test_a_window_that_fails_discards_its_observers_half_written_files(tmp_path):
+    class Breaks(Observer):
+        discarded = False
+
+        def capture(self, swarm: Swarm) -> None:
+            if swarm.step_count == 3:
+                raise RuntimeError("disk on fire")
+
+        def discard(self) -> None:
+            self.discarded = True
+
+    breaks = Breaks()
+    view = window(observers=[breaks])
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        view.run()
+    assert breaks.discarded
+
+
+class Still(Program):
+    """Robots that never move and always say the same: a program that goes quiet."""
+
+    name = "still"
+    message_size = 1
+
+    def act(self, sense, memory, rng):
+        return np.zeros(len(sense), dtype=np.int64), np.zeros((len(sense), 1), dtype=np.int64)
+
+
+def test_a_local_program_gone_quiet_leaves_the_window_idle_where_a_headless_run_stops():
+    view = window(Still)
+    try:
+        for _ in range(200):
+            if view.idle:
+                break
+            view.tick()
+        headless = run(Swarm(world_of(SHAPE), Still(), 3))
+        assert view.idle and view.swarm.step_count == headless.step_count
+        assert not view.swarm.complete
+    finally:
+        pygame.quit()
+
+
+# --- a HUD that explains itself ----------------------------------------------------------
+
+
+def test_the_pace_reads_right_for_one_step_many_and_fractions(viewer):
+    for speed, words in ((1, "1 step/frame"), (8, "8 steps/frame"), (0.125, "1 step/8 frames")):
+        viewer.speed_index = SPEEDS.index(speed)
+        assert f"   {words}   " in viewer.status()
+
+
+def test_an_idle_window_says_why_where_the_frame_rate_stood(viewer):
+    viewer.tick()
+    assert "FPS" in viewer.status() and "idle" not in viewer.status()
+    press(viewer, pygame.K_SPACE)
+    assert "idle: PAUSED, Space goes on" in viewer.status() and "FPS" not in viewer.status()
+    press(viewer, pygame.K_SPACE)
+    while not viewer.idle:
+        viewer.tick()
+    assert "idle: formed, nothing moves" in viewer.status()
+
+
+def test_a_notice_leaves_the_key_help_in_view(viewer):
+    viewer.tick()
+    press(viewer, pygame.K_r)
+    top, _, helps, _ = viewer._layout()
+    assert viewer._second_line() == "restarted with seed 3"
+    assert "restarted with seed 3" in [text for text, _ in top]
+    assert "r restart" in " ".join(helps) and "q quit" in " ".join(helps)
+
+
+def test_with_nothing_to_tell_the_second_line_says_what_runs(viewer):
+    viewer.tick()
+    assert viewer._second_line() == "bar.png: paper, 4 robots for 4 cells"
+
+
+@pytest.mark.parametrize("size", [(320, 240), (640, 400), (1280, 800), (2560, 1440)])
+def test_the_hud_fits_the_window_at_every_size(viewer, size):
+    """Every line of the bars fits the width (a single word too wide for it excepted), the
+    legend too (where it leaves the arena at least half the height), and the arena keeps
+    nearly half the window even when it is tiny."""
+    press(viewer, pygame.K_x)  # a long notice
+    resize(viewer, size)
+    top, keys, helps, area = viewer._layout()
+    room = size[0] - 2 * HUD_PAD
+    for text in [text for text, _ in top] + helps:
+        assert viewer.font.size(text)[0] <= room or " " not in text, text
+    for row in keys:
+        gaps = (len(row) - 1) * viewer.font.size(GAP)[0]
+        assert sum(viewer._key_width(key) for key in row) + gaps <= room
+    shown = sum(len(row) for row in keys)
+    assert shown == (len(legend(viewer.swarm)) if size[1] >= 400 else 0)
+    assert area.height >= 0.45 * size[1]

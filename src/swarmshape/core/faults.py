@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from swarmshape.core.options import NUMBER, Spec
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import LOST, STALLED
 from swarmshape.errors import InputError
@@ -149,15 +150,14 @@ def parse_region(text: str, option: str = "--fail-region") -> FaultEvent:
         raise FaultError(f"{option} {text}: {_reason(error)}") from None
 
 
-def check_rate(rate: float, option: str = "--failure-rate") -> float:
-    """A failure rate per robot per step, in [0, 1)."""
-    if isinstance(rate, bool) or not isinstance(rate, int | float):
-        raise FaultError(f"{option} must be a number, got {rate!r}")
-    if not (math.isfinite(rate) and 0 <= rate < 1):
-        raise FaultError(
-            f"{option} must be a probability per robot per step, 0 <= P < 1, got {rate}"
-        )
-    return float(rate)
+FAILURE_RATE = Spec(
+    "failure_rate",
+    NUMBER,
+    0.0,
+    "each robot fails (is removed) with this probability per step",
+    at_least=0.0,
+    below=1.0,
+)
 
 
 def events_from_values(values: Any, where: str) -> tuple[FaultEvent, ...]:
@@ -218,7 +218,7 @@ class Faults:
 
     def __init__(self, events: tuple[FaultEvent, ...] = (), rate: float = 0.0, robots: int = 0):
         self.events = tuple(sorted(events, key=lambda e: e.step))
-        self.rate = check_rate(rate)
+        self.rate = FAILURE_RATE.check(rate)
         self.log: list[dict[str, Any]] = []
         self.lost_at = np.full(robots, -1, dtype=np.int64)
 

@@ -18,21 +18,22 @@ and does not act. Arrays keep one row per robot throughout, so a program's memor
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from swarmshape.core.motion import STEPS
+from swarmshape.core.motion import RIGHT, STEPS
 from swarmshape.core.perception import (
     Blueprint,
     Perception,
-    Senses,
     neighbours,
     quarter_turns,
     turn,
 )
+from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot
-from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING
+from swarmshape.core.states import STALLED
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
@@ -51,6 +52,40 @@ class Slot:
     dtype: type
     fill: Any = 0
     width: int | None = None
+
+
+class Schema:
+    """What a program broadcasts, as named fields declared once, each one or more integers
+    wide: ``Schema(state=1, position=2)``. `pack` lays a message out from its fields by name,
+    `read` gives the fields of messages heard (views, a field of width 1 as a vector)."""
+
+    def __init__(self, **widths: int) -> None:
+        self.widths = widths
+        ends = np.cumsum(list(widths.values()))
+        self.slices = {
+            name: slice(int(end) - width, int(end))
+            for (name, width), end in zip(widths.items(), ends, strict=True)
+        }
+
+    def __len__(self) -> int:
+        return sum(self.widths.values())
+
+    def pack(self, **fields: np.ndarray) -> np.ndarray:
+        """A message per robot ``(n, len(self))`` from every field, by name."""
+        if set(fields) != set(self.widths):
+            raise TypeError(f"a message has exactly the fields {', '.join(self.widths)}")
+        n = len(next(iter(fields.values())))
+        columns = [np.asarray(fields[name]).reshape(n, w) for name, w in self.widths.items()]
+        return np.concatenate(columns, axis=1).astype(np.int64)
+
+    def read(self, message: np.ndarray) -> SimpleNamespace:
+        """The fields of messages ``(m, len(self))``, by name."""
+        return SimpleNamespace(
+            **{
+                name: message[:, part.start] if self.widths[name] == 1 else message[:, part]
+                for name, part in self.slices.items()
+            }
+        )
 
 
 class Memory:
@@ -74,30 +109,21 @@ class ProgramError(InputError):
     """A program returned something the core cannot act on; the message says what."""
 
 
-class Program:
+class Program(Plugin):
     """Base class of local programs. Subclass it, give it a ``name``, a one-line
     ``description``, the ``message_size`` (ints per broadcast), the ``memory`` it keeps, and
     write `act`. Randomness comes only from the `rng` passed in."""
 
-    name: ClassVar[str]
-    description: ClassVar[str]
     kind: ClassVar[str] = "local"
     message_size: ClassVar[int] = 0
     memory: ClassVar[dict[str, Slot]] = {}
     states: ClassVar[tuple[str, ...]] = ()
     """Names of the values of ``memory.state``, if the program keeps one (the viewer colours
     robots by it)."""
-    grows_from_seeds: ClassVar[bool] = False
-    """True if the program builds outward from the seeds, so it can form only a shape's
-    `Shape.solid` part (one piece with its seeds, no holes): checks and tests then give it
-    solid shapes, and a run warns about any other."""
     shown: ClassVar[str | None] = None
     """The integer memory slot the viewer can print on each robot (a gradient, a hop count), so
     a program's field can be seen without a debugger; values 0 to 998 are printed, others
     (999 or more, negative) mean "unknown" and are left blank."""
-
-    def __init__(self, senses: Senses | None = None) -> None:
-        self.senses = senses or Senses()
 
     def act(
         self, sense: Perception, memory: Memory, rng: np.random.Generator
@@ -116,7 +142,6 @@ class Program:
         return np.zeros(len(memory), dtype=bool)
 
     def drive(self, swarm: Swarm) -> LocalControl:
-        """The swarm's driver for this plug-in (the core's side of the contract)."""
         return LocalControl(swarm, self)
 
 
@@ -144,7 +169,7 @@ class LocalControl:
         self.memory = Memory(program.memory, n)
         self.broadcast = np.zeros((n, program.message_size), dtype=np.int64)
         self.last_cell = swarm.cell.copy()
-        self.reach = program.senses.reach()
+        self.reach = swarm.params.senses.reach()
         self.sent = 0
         self.lost = 0
         self.quiet_steps = 0
@@ -203,9 +228,12 @@ class LocalControl:
         changed = not np.array_equal(messages, self.broadcast)
         self.broadcast = messages
         self.sent += len(messages) if self.program.message_size else 0
-        robots = np.flatnonzero(sense.ready & (moves > 0))
+        # at rest a robot may start any way; under way it may only go on straight ahead
+        going = (moves > 0) & (sense.ready | (sense.cruising & (moves == sense.heading)))
+        robots = np.flatnonzero(going)
         directions = self.frame_directions[self.turns[swarm.group[robots]], moves[robots]]
-        keys = swarm.lattice.key(swarm.cell[robots])
+        ahead = swarm.ahead[robots, None]
+        keys = swarm.lattice.key(swarm.cell[robots] + STEPS[swarm.direction[robots]] * ahead)
         entering = keys + swarm.lattice.offsets[directions]
         allowed = swarm.enterable(entering, swarm.group[robots], directions)
         swarm.claim(robots[allowed], directions[allowed], keys[allowed])
@@ -219,7 +247,7 @@ class LocalControl:
         row by row, every field read strides over all the others (local-swap at 10,000 robots:
         240 to 255 ms a step, against 161 ms field by field)."""
         swarm = self.swarm
-        n, senses = len(swarm.cell), self.program.senses
+        n, senses = len(swarm.cell), swarm.params.senses
         seeds = swarm.world.seeds
         present = swarm.present
         start, owner, other = neighbours(swarm.cell, seeds, swarm.world.size, self.reach, present)
@@ -248,12 +276,17 @@ class LocalControl:
         frames = np.concatenate([np.zeros((n, 2), dtype=np.int64), self.seed_frame])
         seed_frame = np.take(frames, other, axis=0)
         seed_frame[unheard] = 0
-        moved = turn(swarm.cell - self.last_cell, (-self.turns[swarm.group]) % 4)
+        back = (-self.turns[swarm.group]) % 4
+        moved = turn(swarm.cell - self.last_cell, back)
         self.last_cell = swarm.cell.copy()
+        acting = present & (swarm.state != STALLED)
         return Perception(
             number=self.number,
             group=swarm.group,
-            ready=(swarm.ahead == 0) & present & (swarm.state != STALLED),
+            ready=(swarm.ahead == 0) & acting,
+            heading=np.where(swarm.ahead > 0, self.frame_directions[back, swarm.direction], 0),
+            cruising=(swarm.ahead == 1) & acting,
+            progress=np.where(swarm.ahead > 0, swarm.offset, 0.0),
             moved=moved,
             start=start,
             owner=owner,
@@ -265,6 +298,7 @@ class LocalControl:
             seed_frame=seed_frame,
             blueprint=self.blueprint,
             step=swarm.step_count,
+            radius=senses.radius,
         )
 
     def _checked(self, moves: Any, messages: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -282,19 +316,14 @@ class LocalControl:
         self._note_filled()
 
     def _note_filled(self) -> None:
-        """Robots the program calls finished and that rest on a target of their group are
-        settled (a shape change can leave a finished robot off the new shape; it is not settled
-        there), those under way are moving; a target is filled while a settled robot is on it."""
+        """Robots the program calls finished that rest on a target of their group are settled
+        (a shape change can leave a finished robot off the new shape; it is not settled
+        there); the swarm fills the targets they rest on."""
         swarm = self.swarm
         at = swarm.target_at[swarm.cell[:, 0], swarm.cell[:, 1]]
         on_target = (at >= 0) & (swarm.world.target_group[np.maximum(at, 0)] == swarm.group)
-        working = (swarm.state != LOST) & (swarm.state != STALLED)
-        swarm.state[working] = np.where(swarm.ahead[working] > 0, MOVING, WAITING)
         finished = self.program.finished(self.memory) & (swarm.ahead == 0) & on_target
-        swarm.state[working & finished] = SETTLED
-        settled = swarm.state == SETTLED
-        swarm.filled[:] = False
-        swarm.filled[at[settled]] = True
+        swarm.settle_exactly(finished)
 
     def completed(self, group: int) -> None:
         """Nothing to hand over: the program keeps running as it is."""
@@ -339,7 +368,7 @@ class LocalControl:
 def _turned_directions() -> np.ndarray:
     """``[turns, direction]``: the `STEPS` index of a direction turned by quarter turns."""
     table = np.zeros((4, len(STEPS)), dtype=np.int64)
-    for turns in range(4):
-        turned = turn(STEPS, np.full(len(STEPS), turns))
-        table[turns] = [np.flatnonzero((step == STEPS).all(axis=1))[0] for step in turned]
+    table[0] = np.arange(len(STEPS))
+    for turns in range(1, 4):
+        table[turns] = RIGHT[table[turns - 1]]
     return table

@@ -15,10 +15,20 @@ import numpy as np
 from numba import njit
 
 from swarmshape.core.lattice import FREE
-from swarmshape.errors import InputError
+from swarmshape.core.options import checked, option
+from swarmshape.errors import SettingError
 
 STEPS = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
-"""Direction index -> unit step; index 0 means "no direction"."""
+"""Direction index -> unit step (0 none, 1 east, 2 west, 3 south, 4 north; y down)."""
+REVERSE = np.array([0, 2, 1, 4, 3])
+"""The opposite of each direction index."""
+RIGHT = np.array([0, 3, 4, 2, 1])
+"""Each direction turned a quarter clockwise on screen: east -> south -> west -> north."""
+LEFT = RIGHT[RIGHT[RIGHT]]
+"""Each direction turned a quarter anticlockwise on screen."""
+DIRECTION_OF = np.zeros((3, 3), dtype=np.int64)
+DIRECTION_OF[STEPS[:, 0] + 1, STEPS[:, 1] + 1] = np.arange(len(STEPS))
+"""The direction index of each unit step ``(dx, dy)``, at ``[dx + 1, dy + 1]``."""
 
 SLOWEST = 0.001
 """Smallest speed and acceleration limit: a thousand steps a cell. Far smaller ones would only
@@ -47,17 +57,15 @@ class Motion(Enum):
 class Limits:
     """Kinematic limits in cells per step (speed) and cells per step squared (acceleration)."""
 
-    max_speed: float = 0.5
-    max_accel: float = 0.125
+    max_speed: float = option(0.5, "cells per step", at_least=SLOWEST, at_most=1.0)
+    max_accel: float = option(0.125, "cells per step squared", at_least=SLOWEST, at_most=1.0)
 
     def __post_init__(self) -> None:
-        if not SLOWEST <= self.max_speed <= 1.0:
-            raise InputError(
-                f"max speed must be in [{SLOWEST}, 1] cells per step, got {self.max_speed}"
-            )
-        if not SLOWEST <= self.max_accel <= self.max_speed:
-            raise InputError(
-                f"max acceleration must be in [{SLOWEST}, max speed], got {self.max_accel}"
+        checked(self)
+        if self.max_accel > self.max_speed:
+            raise SettingError(
+                "max_accel",
+                f"must be at most max_speed ({self.max_speed:g}), got {self.max_accel:g}",
             )
 
 

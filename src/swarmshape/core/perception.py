@@ -15,31 +15,34 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from swarmshape.core.options import checked, option
 from swarmshape.core.shape import Pose
-from swarmshape.errors import InputError
 
 
 @dataclass(frozen=True)
 class Senses:
     """How well robots sense and talk; the names match Kilombo's and ARGoS's knobs."""
 
-    radius: float = 3.0
-    """Sensing and communication range in cells (a Kilobot reaches about three bodies)."""
-    distance_noise: float = 0.0
-    """Standard deviation, in cells, of Gaussian noise on each sensed offset."""
-    msg_loss: float = 0.0
-    """Chance per step that the link between two neighbours fails, both ways (an obstacle in
-    the infrared); each message is lost with this chance, Kilombo's ``1 - msgSuccessRate``."""
+    radius: float = option(
+        3.0,
+        "cells within which a robot senses and hears others (a Kilobot reaches about three bodies)",
+        name="sense_radius",
+        at_least=1.0,
+        at_most=16.0,
+    )
+    distance_noise: float = option(
+        0.0, "standard deviation of each sensed offset, in cells", at_least=0.0, at_most=1.0
+    )
+    msg_loss: float = option(
+        0.0,
+        "chance per step that the link between two neighbours fails, both ways; Kilombo's "
+        "msgSuccessRate is 1 - this",
+        at_least=0.0,
+        below=1.0,
+    )
 
     def __post_init__(self) -> None:
-        if not 1.0 <= self.radius <= 16.0:
-            raise InputError(f"--sense-radius must be from 1 to 16 cells, got {self.radius}")
-        if not 0.0 <= self.distance_noise <= 1.0:
-            raise InputError(
-                f"--distance-noise must be from 0 to 1 cell, got {self.distance_noise}"
-            )
-        if not 0.0 <= self.msg_loss < 1.0:
-            raise InputError(f"--msg-loss must be at least 0 and below 1, got {self.msg_loss}")
+        checked(self)
 
     def reach(self) -> np.ndarray:
         """Cell offsets ``(k, 2)`` within the radius, nearest first, without ``(0, 0)``."""
@@ -114,7 +117,16 @@ class Perception:
     """Each robot's number in its group, 0 up: a unique ID it was built with."""
     group: np.ndarray
     ready: np.ndarray
-    """At rest on a cell centre: a move it asks for can start now (others are under way)."""
+    """At rest on a cell centre: a move it asks for, any way, starts now."""
+    heading: np.ndarray
+    """The direction it is moving in (a move index, seed-frame axes), 0 at rest."""
+    cruising: np.ndarray
+    """Under way with its next cell reserved and no further: a move straight on (`heading`)
+    asked for now goes on without braking. Asked for nothing, it brakes and stops on that cell
+    (it cannot turn while under way)."""
+    progress: np.ndarray
+    """How far, in cells, it has come from its cell's centre along `heading` (its odometer's
+    fraction of a cell; 0 at rest): its neighbours' offsets are from where it is now."""
     moved: np.ndarray
     """Odometry: the whole cells each robot moved since the last step ``(n, 2)``."""
     start: np.ndarray
@@ -135,6 +147,8 @@ class Perception:
     """A heard seed's frame cell ``(m, 2)`` (zeros elsewhere)."""
     blueprint: Blueprint
     step: int
+    radius: float
+    """How far, in cells, every robot senses and hears (the run's sensing radius)."""
 
     def __len__(self) -> int:
         return len(self.number)

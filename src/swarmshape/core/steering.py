@@ -22,6 +22,7 @@ from swarmshape.core.lattice import FREE, SEED, WALL
 from swarmshape.core.messages import MessageQueue
 from swarmshape.core.motion import STEPS, Motion, rows
 from swarmshape.core.navigation import CrossingCounter, FieldPlanner, straight_preferences
+from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot, decode_attributes, encode_attributes, prefixed
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING
 from swarmshape.core.tswap import one_per_blocker, rotate_rings, shortening_swaps
@@ -32,7 +33,7 @@ if TYPE_CHECKING:
     from swarmshape.core.world import World
 
 
-class Strategy:
+class Strategy(Plugin):
     """Base class of central planners: who goes to which target cell, and when.
 
     Subclass it, give it a ``name`` and a one-line ``description``, and hand out targets in
@@ -40,8 +41,6 @@ class Strategy:
     Randomness must come from ``swarm.rng`` so that runs repeat exactly per seed.
     """
 
-    name: ClassVar[str]
-    description: ClassVar[str]
     kind: ClassVar[str] = "central"
     motion: ClassVar[Motion] = Motion.SWAP
 
@@ -66,18 +65,20 @@ class Strategy:
         swarm.recruit(group)
 
     def drive(self, swarm: Swarm) -> Steering:
-        """The swarm's driver for this plug-in (the core's side of the contract)."""
         return Steering(swarm, self)
 
     def snapshot(self) -> dict[str, Any]:
-        """What a saved run keeps of this strategy. Default: every attribute, which must be a
-        number, text, a numpy array, or a list of them."""
-        return encode_attributes(f"strategy {self.name!r}", vars(self))
+        """What a saved run keeps of this strategy. Default: every attribute but its options
+        (the run keeps those), each a number, text, a numpy array, or a list of them."""
+        return encode_attributes(f"strategy {self.name!r}", self._state())
 
     def restore(self, saved: Snapshot, swarm: SwarmView) -> None:
         """Take back what `snapshot` saved, into a freshly made strategy."""
-        for name, value in decode_attributes(saved, vars(self)).items():
+        for name, value in decode_attributes(saved, self._state()).items():
             setattr(self, name, value)
+
+    def _state(self) -> dict[str, Any]:
+        return {name: value for name, value in vars(self).items() if name != "options"}
 
 
 class SwarmView:
@@ -247,10 +248,7 @@ class Steering:
         if ((state == LOST) | (state == STALLED)).any():
             working = (state != LOST) & (state != STALLED)
             robots, targets = robots[working], np.broadcast_to(targets, robots.shape)[working]
-            state = state[working]
-        moving_on = robots[(state == SETTLED) & (self.target[robots] >= 0)]
-        self.swarm.filled[self.target[moving_on]] = False
-        self.swarm.state[robots] = MOVING
+        self.swarm.dispatch(robots)
         self.target[robots] = targets
         self.blocked[robots] = 0
         self.routed[robots] = self.motion is Motion.ROUTE
@@ -258,7 +256,7 @@ class Steering:
         self.planner.forget(robots)
 
     def release(self, robots: np.ndarray) -> None:
-        self.swarm.state[robots] = WANDERING
+        self.swarm.release(robots)
         self.target[robots] = -1
         self.planner.forget(robots)
 
@@ -331,8 +329,7 @@ class Steering:
         candidates = np.flatnonzero((swarm.state == MOVING) & (swarm.ahead == 0))
         apart = rows(swarm.cell, candidates) - rows(swarm.world.targets, self.target[candidates])
         done = candidates[(apart[:, 0] == 0) & (apart[:, 1] == 0)]
-        swarm.state[done] = SETTLED
-        swarm.filled[self.target[done]] = True
+        swarm.settle(done)
         self.routed[done] = False  # the way it went round something is behind it
         self.planner.forget(done)
         if len(done):
@@ -348,7 +345,6 @@ class Steering:
         has_target = self.target >= 0
         self.target[has_target] = renumber[self.target[has_target]]
         self.release(np.flatnonzero(has_target & (self.target < 0)))
-        self.swarm.filled[self.target[self.swarm.state == SETTLED]] = True
 
     def removed(self, robots: np.ndarray, stalled: bool) -> None:
         """A fault took `robots`: forget their targets, paths and messages; robots heading for a
@@ -362,7 +358,7 @@ class Steering:
         self.queue.drop(robots)
         heading = np.flatnonzero(self.target >= 0)
         doomed = heading[swarm.dead[self.target[heading]]]
-        swarm.state[doomed] = WAITING
+        swarm.wait(doomed)
         self.target[doomed] = -1
         self.planner.forget(doomed)
         if stalled:  # everyone plans afresh around the new obstacles
@@ -519,9 +515,7 @@ class Steering:
 
     def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
         """The settled robot takes the mover's target and moves on; the mover takes its cell."""
-        swarm = self.swarm
-        swarm.filled[self.target[settled]] = False
-        swarm.state[settled] = MOVING
+        self.swarm.dispatch(settled)
         both = np.concatenate([movers, settled])
         self._pass_targets(both, np.concatenate([settled, movers]))
         # the pushed robot goes on round what the mover was going round (a settled robot has

@@ -9,6 +9,7 @@ never imports pygame.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -20,12 +21,15 @@ from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.faults import Faults
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, Limits, move, positions, resolve_claims
+from swarmshape.core.options import option, spec_of
+from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
-from swarmshape.core.states import LOST, SETTLED, STALLED, WAITING, State
+from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING, State
 from swarmshape.core.world import World, WorldError
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
+    from swarmshape.core.plugin import Plugin
     from swarmshape.core.shape import Pose, Shape
 
 FOLLOW_PASSES = 64
@@ -42,17 +46,22 @@ class Params:
     """Behaviour knobs shared by all robots."""
 
     limits: Limits = field(default_factory=Limits)
+    senses: Senses = field(default_factory=Senses)
+    """How well a local program's robots sense and talk (the run's, not the program's)."""
     wander_rate: float = 0.1
     """Chance per step that a resting spare robot tries a random step."""
     patience: int = 3
     """Steps a mover waits behind a resting robot before it replans; twice that, it sidesteps."""
-    speed_variation: float = 0.0
-    """Each robot's top speed is ``limits.max_speed`` times a factor from ``[1 - this, 1]``,
-    drawn once (real robots differ; slow ones make traffic jams)."""
+    speed_variation: float = option(
+        0.0,
+        "each robot's top speed is max_speed times a factor drawn once from [1 - this, 1] "
+        "(real robots differ; slow ones make traffic jams)",
+        at_least=0.0,
+        at_most=0.9,
+    )
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.speed_variation <= 0.9:
-            raise InputError(f"--speed-variation must be from 0 to 0.9, got {self.speed_variation}")
+        spec_of(Params, "speed_variation").check(self.speed_variation)
 
 
 class Driver(Protocol):
@@ -74,7 +83,7 @@ class Driver(Protocol):
         """Every target of `group` is filled."""
 
     def reshaped(self, renumber: np.ndarray) -> None:
-        """The targets were renumbered after a shape change (-1: gone); mark `Swarm.filled`."""
+        """The targets were renumbered after a shape change (-1: gone)."""
 
     def removed(self, robots: np.ndarray, stalled: bool) -> None:
         """A fault struck `robots`: they no longer act. Without `stalled` they are gone (state
@@ -102,14 +111,6 @@ class Driver(Protocol):
 
     def restore(self, saved: Snapshot) -> None:
         """Take back what `snapshot` saved (the swarm's own arrays are back already)."""
-
-
-class Plugin(Protocol):
-    """A strategy (or any other plug-in kind): it names itself and drives a swarm."""
-
-    name: str
-
-    def drive(self, swarm: Swarm) -> Driver: ...
 
 
 class Swarm:
@@ -193,6 +194,7 @@ class Swarm:
             "wander_rate": self.params.wander_rate,
             "patience": self.params.patience,
             "speed_variation": self.params.speed_variation,
+            "senses": dataclasses.asdict(self.params.senses),
             "rng": self.rng.bit_generator.state,
             "step": self.step_count,
             "overlap_total": self.overlap_total,
@@ -218,7 +220,15 @@ class Swarm:
             raise saved.error("max_speed", f"and max_accel are not valid ({error})") from None
         wander_rate = saved.number("wander_rate", 0, 1)
         patience = saved.integer("patience", 1, 10**6)
-        params = Params(limits, wander_rate, patience, saved.number("speed_variation", 0, 0.9))
+        senses = saved.value("senses")
+        if not isinstance(senses, dict) or set(senses) != {"radius", "distance_noise", "msg_loss"}:
+            raise saved.error("senses", "is not a sensing radius, distance noise and message loss")
+        try:
+            senses = Senses(**senses)
+        except InputError as error:
+            raise saved.error("senses", f"are not valid ({error})") from None
+        speed_variation = saved.number("speed_variation", 0, 0.9)
+        params = Params(limits, senses, wander_rate, patience, speed_variation)
         swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
         swarm._restore_arrays(saved)
         swarm._restore_rng(saved)
@@ -297,6 +307,48 @@ class Swarm:
         """The index of the target at each cell, -1 where there is none."""
         self.dead = self._find_dead()
         self.driver.index_world()
+
+    # --- the robots' states: drivers say what happened, only the swarm writes it ---------------
+
+    def settle(self, robots: np.ndarray) -> None:
+        """`robots` rest on targets of their own group and settle: those targets are filled."""
+        self.state[robots] = SETTLED
+        self.filled[self._target_under(robots)] = True
+
+    def dispatch(self, robots: np.ndarray) -> None:
+        """`robots` set off for a target; a settled one leaves its target open."""
+        settled = robots[self.state[robots] == SETTLED]
+        under = self._target_under(settled)
+        self.filled[under[under >= 0]] = False
+        self.state[robots] = MOVING
+
+    def release(self, robots: np.ndarray) -> None:
+        """`robots` have nothing left to do and wander."""
+        self.state[robots] = WANDERING
+
+    def wait(self, robots: np.ndarray) -> None:
+        """`robots` wait for a target."""
+        self.state[robots] = WAITING
+
+    def settle_exactly(self, settled: np.ndarray) -> None:
+        """Exactly the robots of the mask `settled` are settled (a local program says so anew
+        each step); the others that can act are moving if under way, else waiting."""
+        working = self._mobile()
+        self.state[working] = np.where(self.ahead[working] > 0, MOVING, WAITING)
+        self.state[working & settled] = SETTLED
+        self._refill()
+
+    def _refill(self) -> None:
+        """A target is filled while a settled robot of its group rests on it."""
+        self.filled[:] = False
+        under = self._target_under(np.flatnonzero(self.state == SETTLED))
+        self.filled[under[under >= 0]] = True
+
+    def _target_under(self, robots: np.ndarray) -> np.ndarray:
+        """The target of its own group each robot rests on, or -1."""
+        at = self.target_at[self.cell[robots, 0], self.cell[robots, 1]]
+        mine = (at >= 0) & (self.world.target_group[np.maximum(at, 0)] == self.group[robots])
+        return np.where(mine, at, -1)
 
     # --- reading the run ------------------------------------------------------------------------
 
@@ -440,6 +492,7 @@ class Swarm:
         self.lattice.grid[old.mask(old.seeds)] = FREE
         self.world = new
         self._index_world()
+        self._refill()
         self.completed_at[group] = None
         self.driver.hand_out(group)
 

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from swarmshape.config import configure, plugin_options
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint
 from swarmshape.core.shape import Shape
@@ -23,6 +24,7 @@ from swarmshape.env.observe import (
     FRAME_X,
     FRAME_Y,
     GROUP,
+    HEADING,
     MOVED_X,
     MOVED_Y,
     NUMBER,
@@ -33,11 +35,12 @@ from swarmshape.env.observe import (
 )
 from swarmshape.env.relay import NAME, Relay, RelayControl
 from swarmshape.env.rewards import CoverageShare, Reward
-from swarmshape.env.screen import Screen
 from swarmshape.errors import InputError
 from swarmshape.io.scenario import PALETTE, parse_colour, read_start_cells
-from swarmshape.runs import configure, load_world, start_swarm
+from swarmshape.runs import load_world, start_swarm
 
+FPS = 30
+RENDER_MODES = ("human", "rgb_array")
 EPISODE_STEPS = 1_000
 """An episode's step limit unless ``max_steps`` is given (the command line's 500,000 is a
 whole run's)."""
@@ -47,7 +50,6 @@ MOVES = len(STEPS)
 
 NOT_OPTIONS = {
     "strategy": "the robots are driven by the trainer's actions",
-    "order": "the robots are driven by the trainer's actions",
     "seed": "give it to reset(seed=...)",
 }
 IMAGE_OPTIONS = ("cells", "threshold", "invert", "fit")
@@ -61,7 +63,7 @@ class Episode:
         shape: str | Path | np.ndarray | None = None,
         *,
         neighbours: int | None = None,
-        message_size: int = 0,
+        message_size: int | None = None,
         message_range: tuple[int, int] = (0, 255),
         reward: Reward | None = None,
         **options: Any,
@@ -71,6 +73,8 @@ class Episode:
                 raise InputError(f"{name} is not an environment option: {why}")
         if options.get("max_steps") is None:
             options["max_steps"] = EPISODE_STEPS
+        if message_size is not None:  # the trainer's relay's option, given by its name
+            options["options"] = {**(options.get("options") or {}), "message_size": message_size}
         if shape is None or isinstance(shape, str | Path):
             self.config = configure(shape, strategy=NAME, **options)
             self.world = load_world(self.config)
@@ -84,8 +88,8 @@ class Episode:
         neighbours = cells_in_reach if neighbours is None else neighbours
         if not 0 <= neighbours <= 4096:
             raise InputError(f"neighbours must be from 0 to 4096 slots, got {neighbours}")
-        if not 0 <= message_size <= 64:
-            raise InputError(f"message_size must be from 0 to 64 integers, got {message_size}")
+        self.relay = Relay(plugin_options(self.config))
+        message_size = self.relay.message_size
         low, high = message_range
         if not -(2**24) <= low <= high < 2**24:
             raise InputError(
@@ -93,8 +97,7 @@ class Episode:
                 f"float32 observations), got {message_range}"
             )
         self.message_range = (int(low), int(high))
-        self.relay = Relay(senses, message_size)
-        self.layout = Layout(neighbours, message_size)
+        self.layout = Layout(neighbours, message_size, senses.radius)
         self.offset_bound = math.ceil(senses.radius) + 2 + math.ceil(8 * senses.distance_noise)
         """Offsets lie within this (the farthest neighbour may be a cell ahead of its own, as
         may the robot); noisy ones are clipped to it, 8 standard deviations out."""
@@ -116,6 +119,7 @@ class Episode:
         low, high = np.zeros(layout.size, np.float32), np.ones(layout.size, np.float32)
         own_low, own_high = layout.own(low), layout.own(high)
         own_low[MOVED_X : MOVED_Y + 1], own_high[MOVED_X : MOVED_Y + 1] = -2, 2
+        own_high[HEADING] = MOVES - 1
         # upper bounds of at least 1: a bound with low == high reads as a mistake to checkers
         own_high[NUMBER] = max(1, max(g.agents for g in world.groups) - 1)
         own_high[GROUP] = max(1, len(world.groups) - 1)
@@ -224,9 +228,17 @@ class Host:
         render_size: tuple[int, int] = (640, 400),
         **options: Any,
     ) -> None:
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(
+                f"render_mode must be one of {RENDER_MODES} or None, got {render_mode!r}"
+            )
         self.episode = Episode(shape, **options)
-        self.screen = Screen(render_mode, render_size)
         self.render_mode = render_mode
+        self.screen = None
+        if render_mode is not None:
+            from swarmshape.ui.screen import Screen  # pygame, only to render
+
+            self.screen = Screen(render_mode, render_size, FPS)
 
     @property
     def layout(self) -> Layout:
@@ -239,7 +251,16 @@ class Host:
         return self.episode.blueprint
 
     def render(self) -> np.ndarray | None:
-        return self.screen.render(self.episode.swarm)
+        return None if self.screen is None else self.screen.render(self.episode.swarm)
+
+    def show(self) -> None:
+        """After a reset or a step: a window follows the swarm."""
+        if self.screen is not None:
+            self.screen.update(self.episode.swarm)
+
+    def close(self) -> None:
+        if self.screen is not None:
+            self.screen.close()
 
     def coverage(self) -> float:
         """Filled target cells over target cells, now."""

@@ -3,11 +3,14 @@
 Every robot's observation is one float32 row: first its own state, then ``K`` neighbour slots
 (nearest first, as the robot senses them; unused slots are all zero with ``present`` 0)::
 
-    own:        ready, moved_x, moved_y, number, group, step
+    own:        ready, cruising, heading, progress, moved_x, moved_y, number, group, step
     each slot:  present, dx, dy, seed, kin, heard, frame_x, frame_y, message_0 .. message_{k-1}
 
-- ``ready``: at rest on a cell centre, so a move given now starts now (a robot under way
-  finishes its move first and ignores the action).
+- ``ready``: at rest on a cell centre, so a move given now starts now, any way.
+- ``cruising``: under way with its next cell reserved and no further: the action ``heading``
+  (straight on) goes on without braking; any other action lets it brake and stop on that cell
+  (a robot under way cannot turn). ``heading``: the move it is making (0 at rest);
+  ``progress``: how far along it it has come from its cell's centre (0 to 1).
 - ``moved_x, moved_y``: odometry, whole cells moved in the last step.
 - ``number``: the robot's number in its group (a unique ID); ``group``: its group; ``step``.
 - ``dx, dy``: the neighbour's centre relative to the robot's, in cells (noisy if the run has
@@ -29,9 +32,10 @@ import numpy as np
 
 from swarmshape.core.perception import Blueprint, Perception
 
-OWN = ("ready", "moved_x", "moved_y", "number", "group", "step")
+OWN = ("ready", "cruising", "heading", "progress", "moved_x", "moved_y", "number", "group",
+       "step")  # fmt: skip
 SLOT = ("present", "dx", "dy", "seed", "kin", "heard", "frame_x", "frame_y")
-READY, MOVED_X, MOVED_Y, NUMBER, GROUP, STEP = range(len(OWN))
+READY, CRUISING, HEADING, PROGRESS, MOVED_X, MOVED_Y, NUMBER, GROUP, STEP = range(len(OWN))
 PRESENT, DX, DY, SEED, KIN, HEARD, FRAME_X, FRAME_Y = range(len(SLOT))
 
 
@@ -43,6 +47,8 @@ class Layout:
     """``K``: neighbour slots per robot."""
     message_size: int
     """Integers per broadcast."""
+    radius: float
+    """The sensing radius the slots were filled from (a program's `Perception.radius`)."""
 
     @property
     def slot_size(self) -> int:
@@ -59,7 +65,7 @@ class Layout:
         return [*OWN, *(f"slot{k}.{name}" for k in range(self.neighbours) for name in slot)]
 
     def own(self, obs: np.ndarray) -> np.ndarray:
-        """The own-state part ``(..., 6)`` of observations ``(..., size)`` (a view)."""
+        """The own-state part ``(..., len(OWN))`` of observations ``(..., size)`` (a view)."""
         return obs[..., : len(OWN)]
 
     def slots(self, obs: np.ndarray) -> np.ndarray:
@@ -74,6 +80,9 @@ def encode(sense: Perception, layout: Layout, bound: float | None = None) -> np.
     obs = np.zeros((n, layout.size), dtype=np.float32)
     own = obs[:, : len(OWN)]
     own[:, READY] = sense.ready
+    own[:, CRUISING] = sense.cruising
+    own[:, HEADING] = sense.heading
+    own[:, PROGRESS] = sense.progress
     own[:, MOVED_X : MOVED_Y + 1] = sense.moved
     own[:, NUMBER] = sense.number
     own[:, GROUP] = sense.group
@@ -116,6 +125,9 @@ def perception_of(obs: np.ndarray, layout: Layout, blueprint: Blueprint) -> Perc
         number=np.rint(own[:, NUMBER]).astype(np.int64),
         group=np.rint(own[:, GROUP]).astype(np.int64),
         ready=own[:, READY] > 0,
+        heading=np.rint(own[:, HEADING]).astype(np.int64),
+        cruising=own[:, CRUISING] > 0,
+        progress=own[:, PROGRESS].astype(np.float64),
         moved=np.rint(own[:, MOVED_X : MOVED_Y + 1]).astype(np.int64),
         start=start,
         owner=owner.astype(np.int64),
@@ -127,4 +139,5 @@ def perception_of(obs: np.ndarray, layout: Layout, blueprint: Blueprint) -> Perc
         seed_frame=whole[:, FRAME_X : FRAME_Y + 1],
         blueprint=blueprint,
         step=int(own[0, STEP]) if len(obs) else 0,
+        radius=layout.radius,
     )

@@ -12,8 +12,7 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from pettingzoo import ParallelEnv
 
-from swarmshape.env.episode import Host
-from swarmshape.env.screen import FPS, RENDER_MODES
+from swarmshape.env.episode import FPS, RENDER_MODES, Host
 
 
 class SwarmEnv(Host, ParallelEnv):
@@ -56,7 +55,7 @@ class SwarmEnv(Host, ParallelEnv):
             self._np_random, self._np_random_seed = seeding.np_random(seed)
         obs = self.episode.reset(int(self.np_random.integers(2**63)))
         self.agents = self.possible_agents[:]
-        self.screen.update(self.episode.swarm)
+        self.show()
         return dict(zip(self.agents, obs, strict=True)), {agent: {} for agent in self.agents}
 
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
@@ -84,11 +83,8 @@ class SwarmEnv(Host, ParallelEnv):
         infos: dict[str, dict] = {agent: {} for agent in live}
         ended = formed or out_of_steps
         self.agents = [] if ended else [agent for agent in live if not terminations[agent]]
-        self.screen.update(episode.swarm)
+        self.show()
         return observations, reward, terminations, truncations, infos
-
-    def close(self) -> None:
-        self.screen.close()
 
     def state(self) -> np.ndarray:
         """A global view for centralised critics: every robot's cell ``(n, 2)`` in world axes

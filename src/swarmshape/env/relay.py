@@ -11,12 +11,14 @@ perception instead of sensing again.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from swarmshape.core.local import LocalControl, Memory, Program
-from swarmshape.core.perception import Perception, Senses
+from swarmshape.core.options import option
+from swarmshape.core.perception import Perception
 
 if TYPE_CHECKING:
     from swarmshape.core.swarm import Swarm
@@ -31,11 +33,17 @@ class Relay(Program):
     name = "trainer"
     description = "local: the actions a trainer gives through swarmshape.env"
 
-    def __init__(self, senses: Senses | None = None, message_size: int = 0) -> None:
-        super().__init__(senses)
-        self.message_size = message_size
+    @dataclass(frozen=True)
+    class Options:
+        message_size: int = option(
+            0, "whole numbers each robot broadcasts, chosen by the trainer", at_least=0, at_most=64
+        )
+
+    def __init__(self, options: Options | None = None) -> None:
+        super().__init__(options)
+        self.message_size = self.options.message_size
         self.moves = np.zeros(0, dtype=np.int64)
-        self.messages = np.zeros((0, message_size), dtype=np.int64)
+        self.messages = np.zeros((0, self.message_size), dtype=np.int64)
 
     def give(self, moves: np.ndarray, messages: np.ndarray) -> None:
         """The moves ``(n,)`` and broadcasts ``(n, message_size)`` of the next step."""

@@ -12,8 +12,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from swarmshape.env.episode import Host
-from swarmshape.env.screen import FPS, RENDER_MODES
+from swarmshape.env.episode import FPS, RENDER_MODES, Host
 
 
 class SwarmVectorEnv(Host, VectorEnv):
@@ -51,7 +50,7 @@ class SwarmVectorEnv(Host, VectorEnv):
             raise ValueError("the robots share one episode: reset_mask must cover every robot")
         obs = self.episode.reset(int(self.np_random.integers(2**63)))
         self._ended = False
-        self.screen.update(self.episode.swarm)
+        self.show()
         return obs, {}
 
     def step(
@@ -63,12 +62,12 @@ class SwarmVectorEnv(Host, VectorEnv):
             return obs, np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), infos
         obs, rewards, formed, out_of_steps = self.episode.step(actions)
         self._ended = formed or out_of_steps
-        self.screen.update(self.episode.swarm)
+        self.show()
         infos = {"acting": self.episode.acting(), "_acting": np.ones(n, dtype=bool)}
         return obs, rewards, np.full(n, formed), np.full(n, out_of_steps), infos
 
     def close_extras(self, **kwargs: Any) -> None:
-        self.screen.close()
+        Host.close(self)
 
 
 def vector_env(shape: str | Path | np.ndarray | None = None, **options: Any) -> SwarmVectorEnv:

@@ -2,7 +2,11 @@
 to form versus robot count with error bars over seeds.
 
 Runs are averaged only over their seeds: a line is one setting (strategy, robots, and any
-other value the sweep varied, such as the shape), labelled with what tells it apart.
+other value the sweep varied). Each shape gets its own panel; in every panel a strategy has
+one colour, and each of the other values (robots, and anything else the sweep varied) one
+line style and one marker, so every line differs from every other in colour or in style
+and marker, even where a setting is a single point. The legend, outside the panels, names
+the colours and the styles apart.
 """
 
 from __future__ import annotations
@@ -23,8 +27,15 @@ from swarmshape.io.files import atomic_write
 PLOTS = ("coverage", "steps")
 NEEDED = ("config.strategy", "agents", "steps", "steps_run", "curve_every", "coverage_curve")
 """Columns the plots read (besides the other ``config.`` ones, which tell settings apart)."""
-STYLES = ("-", "--", ":", "-.")
-"""Line styles of one strategy's settings; each strategy has its colour."""
+LINES = ("-", "--", ":", "-.")
+MARKERS = ("o", "s", "^", "D", "v", "P", "X")
+"""Line styles and markers, paired in turn: 28 styles before a pair repeats (4 and 7 share no
+factor)."""
+SYMLOG_FROM = 10
+"""Steps from which the coverage plot's axis is logarithmic, when runs go on ten times
+longer: the paper's method takes thousands of steps where the others take a hundred."""
+PANEL = (4.2, 3.4)
+"""Inches of one panel; the legend adds its own width on the right."""
 
 Setting = tuple[tuple[str, str], ...]
 """A run's ``config.`` values but its seed and robot count, as (name, value) pairs."""
@@ -72,9 +83,7 @@ def plot_results(
         message = f"{out_dir}: cannot make the folder for the plots ({error.strerror})"
         raise InputError(message) from None
     written = []
-    for name, draw in zip(PLOTS, (_coverage_over_time, _steps_per_robots), strict=True):
-        figure, axes = plt.subplots(figsize=(7, 4.2), layout="constrained")
-        draw(axes, runs)
+    for name, figure in draw_plots(runs).items():
         for form in formats:
             path = out_dir / f"{name}.{form}"
             save = figure.savefig
@@ -82,6 +91,11 @@ def plot_results(
             written.append(path)
         plt.close(figure)
     return written
+
+
+def draw_plots(runs: list[Run]) -> dict[str, Any]:
+    """The figures by name (`PLOTS`), drawn but not saved."""
+    return {"coverage": _coverage_over_time(runs), "steps": _steps_per_robots(runs)}
 
 
 def read_runs(path: Path) -> list[Run]:
@@ -153,72 +167,188 @@ def _finite(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def _labels(settings: list[Setting]) -> list[str]:
-    """Each setting named by its shape if several, its strategy, and any other value that
-    differs between the settings."""
-    differ = {name for name, _ in settings[0] if len({dict(s)[name] for s in settings}) > 1}
-    labels = []
-    for setting in settings:
-        values = dict(setting)
-        parts = [Path(values["shape"]).name] if "shape" in differ else []
-        parts.append(values["strategy"])
-        parts += [f"{name} {value}" for name, value in setting
-                  if name in differ - {"shape", "strategy"}]  # fmt: skip
-        labels.append(", ".join(parts).replace("$", r"\$"))  # a "$" starts no formula here
-    return labels
+def _varied(settings: list[Setting]) -> list[str]:
+    """The settings' names whose values differ between them, but the shape and the strategy
+    (which have their panels and colours)."""
+    values = [dict(setting) for setting in settings]
+    names = [name for name, _ in settings[0] if name not in ("shape", "strategy")]
+    return [name for name in names if len({v[name] for v in values}) > 1]
 
 
-def _styles(settings: list[Setting]) -> list[dict[str, str]]:
-    """A colour per strategy, and a line style per setting within it."""
-    strategies = sorted({dict(setting)["strategy"] for setting in settings})
-    seen: dict[str, int] = defaultdict(int)
-    styles = []
-    for setting in settings:
-        strategy = dict(setting)["strategy"]
-        colour = f"C{strategies.index(strategy) % 10}"
-        styles.append({"color": colour, "linestyle": STYLES[seen[strategy] % len(STYLES)]})
-        seen[strategy] += 1
-    return styles
+def _text(value: str) -> str:
+    return value.replace("$", r"\$")  # a "$" starts no formula here
 
 
-def _coverage_over_time(axes, runs: list[Run]) -> None:
+class Legend:
+    """Colours by strategy and line styles with markers by everything else, handed out in a
+    fixed order so that every panel agrees."""
+
+    def __init__(self, strategies: list[str], styles: list[tuple]) -> None:
+        self.strategies = sorted(set(strategies))
+        self.styles = sorted(set(styles))
+
+    def look(self, strategy: str, style: tuple) -> dict[str, Any]:
+        index = self.styles.index(style)
+        return {
+            "color": f"C{self.strategies.index(strategy) % 10}",
+            "linestyle": LINES[index % len(LINES)],
+            "marker": MARKERS[index % len(MARKERS)],
+            "markerfacecolor": "none",  # hollow: a point under another still shows
+        }
+
+    def draw(self, figure, name: str, label) -> None:
+        """Two legends outside the panels, on the right: the strategies' colours, then what
+        each style stands for (`label` names a style; none if there is only one)."""
+        from matplotlib.lines import Line2D
+
+        colours = [
+            Line2D([], [], color=f"C{i % 10}", linewidth=2.5) for i in range(len(self.strategies))
+        ]
+        first = figure.legend(
+            colours,
+            [_text(s) for s in self.strategies],
+            title="strategy",
+            loc="outside right upper",
+            fontsize="small",
+        )
+        if len(self.styles) < 2:
+            return
+        looks = [self.look(self.strategies[0], style) | {"color": "0.25"} for style in self.styles]
+        figure.legend(
+            [Line2D([], [], **look) for look in looks],
+            [label(style) for style in self.styles],
+            title=name,
+            loc="outside right lower",
+            fontsize="small",
+        )
+        figure.add_artist(first)
+
+
+def _panels(shapes: dict[str, str], title: str):
+    """A figure with one panel per shape, sharing their y axis, titled by the shape's name
+    and what `shapes` says of it."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
+
+    columns = min(len(shapes), 3)
+    rows = math.ceil(len(shapes) / columns)
+    figure, grid = plt.subplots(
+        rows,
+        columns,
+        figsize=(PANEL[0] * columns + 2.4, PANEL[1] * rows + 0.5),
+        sharey=True,
+        squeeze=False,
+        layout="constrained",
+    )
+    for spare in grid.flat[len(shapes) :]:
+        spare.set_axis_off()
+    figure.suptitle(title)
+    panels = dict(zip(sorted(shapes), grid.flat, strict=False))
+    for shape, axes in panels.items():
+        axes.set_title(_text(f"{Path(shape).name}{shapes[shape]}"), fontsize="medium")
+        axes.xaxis.set_major_locator(MaxNLocator(integer=True))
+        axes.grid(alpha=0.3)
+    return figure, panels
+
+
+def _style_label(names: list[str], robots: bool):
+    """How a style is named in the legend: the varied values, and the robot count if the
+    style includes it."""
+
+    def label(style: tuple) -> str:
+        values = style[:-1] if robots else style
+        parts = [f"{name} {value}" for name, value in zip(names, values, strict=True)]
+        parts += [f"{style[-1]} robots"] if robots else []
+        return _text(", ".join(parts))
+
+    return label
+
+
+def _coverage_over_time(runs: list[Run]):
     """Mean coverage of each setting and robot count over its seeds; a run that finished
-    early stays at its last value."""
+    early stays at its last value. Where each shape has one robot count (one robot per
+    cell, say), the count goes in its panel's title instead of the legend."""
     groups: dict[tuple[Setting, int], list[Run]] = defaultdict(list)
     for run in runs:
         groups[(run.setting, run.robots)].append(run)
-    keys = sorted(groups)
-    settings = [setting for setting, _ in keys]
-    for key, label, style in zip(keys, _labels(settings), _styles(settings), strict=True):
-        group = groups[key]
+    settings = sorted({setting for setting, _ in groups})
+    varied = _varied(settings)
+    counts_of: dict[str, set[int]] = defaultdict(set)
+    for setting, robots in groups:
+        counts_of[dict(setting)["shape"]].add(robots)
+    by_robots = any(len(counts) > 1 for counts in counts_of.values())
+
+    def style(setting: Setting, robots: int) -> tuple:
+        values = tuple(dict(setting)[name] for name in varied)
+        return (*values, robots) if by_robots else values
+
+    legend = Legend(
+        [dict(setting)["strategy"] for setting, _ in groups], [style(*key) for key in groups]
+    )
+    sizes = sorted({len(group) for group in groups.values()})
+    each = f"{sizes[0]}" if len(sizes) == 1 else f"{sizes[0]} to {sizes[-1]}"
+    notes = {
+        shape: "" if by_robots else f", {next(iter(counts))} robots"
+        for shape, counts in counts_of.items()
+    }
+    figure, panels = _panels(notes, f"Coverage over time, mean over seeds ({each} runs each)")
+    for (setting, robots), group in sorted(groups.items()):
+        values = dict(setting)
         end = max(int(run.sampled[-1]) for run in group)
         steps = np.union1d(np.arange(0, end, min(run.every for run in group)), [end])
         mean = np.mean([np.interp(steps, run.sampled, run.coverage) for run in group], axis=0)
-        axes.plot(steps, mean, label=f"{label}, {key[1]} robots ({len(group)} runs)", **style)
-    axes.set_xscale("symlog", linthresh=100)
-    axes.set_xlabel("step")
-    axes.set_ylabel("coverage")
-    axes.set_ylim(0, 1.02)
-    axes.legend(fontsize="small")
-    axes.set_title("Coverage over time, mean over seeds")
+        look = legend.look(values["strategy"], style(setting, robots))
+        panels[values["shape"]].plot(steps, mean, markevery=0.1, **look)
+    longest = max(int(run.sampled[-1]) for run in runs)
+    for axes in panels.values():
+        if longest > 10 * SYMLOG_FROM:  # runs of very different lengths: log beyond it
+            axes.set_xscale("symlog", linthresh=SYMLOG_FROM)
+        axes.set_xlim(left=0)
+        axes.set_xlabel("step")
+        axes.set_ylim(0, 1.02)
+    next(iter(panels.values())).set_ylabel("coverage")
+    names = [*varied, "robots"] if by_robots else varied
+    legend.draw(figure, ", ".join(names), _style_label(varied, robots=by_robots))
+    return figure
 
 
-def _steps_per_robots(axes, runs: list[Run]) -> None:
+def _steps_per_robots(runs: list[Run]):
     """Steps until formed against robot count, mean and standard deviation over seeds."""
+    from matplotlib.ticker import LogFormatter
+
     steps: dict[Setting, dict[int, list[float]]] = defaultdict(lambda: defaultdict(list))
     for run in runs:
         if run.steps is not None:
             steps[run.setting][run.robots].append(run.steps)
-    settings = sorted(steps)
-    labels = _labels(settings) if settings else []
-    for setting, label, style in zip(settings, labels, _styles(settings), strict=True):
+    settings = sorted(steps) or sorted({run.setting for run in runs})
+    varied = _varied(settings)
+
+    def style(setting: Setting) -> tuple:
+        return tuple(dict(setting)[name] for name in varied)
+
+    legend = Legend([dict(s)["strategy"] for s in settings], [style(s) for s in settings])
+    figure, panels = _panels(
+        dict.fromkeys((dict(setting)["shape"] for setting in settings), ""),
+        "Steps to form the shape, mean and spread over seeds",
+    )
+    counts: dict[str, set[int]] = defaultdict(set)
+    for setting in sorted(steps):
+        values = dict(setting)
         robots = sorted(steps[setting])
         means = [np.mean(steps[setting][count]) for count in robots]
         spread = [np.std(steps[setting][count]) for count in robots]
-        axes.errorbar(robots, means, yerr=spread, marker="o", capsize=3, label=label, **style)
-    axes.set_yscale("log")
-    axes.set_xlabel("robots")
-    axes.set_ylabel("steps to form")
-    if settings:
-        axes.legend(fontsize="small")
-    axes.set_title("Steps to form the shape, mean and spread over seeds")
+        look = legend.look(values["strategy"], style(setting))
+        panels[values["shape"]].errorbar(robots, means, yerr=spread, capsize=3, **look)
+        counts[values["shape"]].update(robots)
+    for shape, axes in panels.items():
+        if 0 < len(counts[shape]) <= 8:  # few robot counts: name them, and no others
+            axes.set_xticks(sorted(counts[shape]))
+    for axes in panels.values():
+        axes.set_yscale("log")
+        axes.yaxis.set_major_formatter(LogFormatter())  # 100, not 10^2
+        axes.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1, 1)))
+        axes.set_xlabel("robots")
+    next(iter(panels.values())).set_ylabel("steps to form")
+    if steps:
+        legend.draw(figure, ", ".join(varied), _style_label(varied, robots=False))
+    return figure

@@ -32,52 +32,45 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmshape.config import SETTINGS, RunConfig, configure, option_of
 from swarmshape.core.faults import parse_event, parse_region
 from swarmshape.core.metrics import run_metrics
+from swarmshape.core.options import Spec
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
 from swarmshape.io.files import readable_file
-from swarmshape.io.scenario import NOISE_KEYS
-from swarmshape.runs import (
-    Observer,
-    RunConfig,
-    build,
-    configure,
-    load_world,
-    registered_strategy,
-    run,
-)
+from swarmshape.runs import Observer, build, load_world, registered_strategy, run
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
-KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+OWN_KEYS = {
     "shapes": ("a file name", lambda v: isinstance(v, str) and v != ""),
     "strategies": ("a strategy name", lambda v: isinstance(v, str) and v != ""),
     "agents": ("a whole number (0: one per cell)", lambda v: _whole(v) and v >= 0),
-    "cells": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
-    "max_steps": ("a whole number of 0 or more", lambda v: _whole(v) and v >= 0),
-    "order": ("a fill order", lambda v: isinstance(v, str)),
-    "max_speed": ("a number", lambda v: _number(v)),
-    "max_accel": ("a number", lambda v: _number(v)),
     "curve_every": ("a whole number of at least 1", lambda v: _whole(v) and v >= 1),
     "start": ("packed or scatter", lambda v: v in START_LAYOUTS),
     "fail": ("AMOUNT@STEP text such as '0.2@300' (robots removed at random)", lambda v: _fault(v)),
     "stall": ("AMOUNT@STEP text such as '0.1@300' (robots stalled)", lambda v: _fault(v)),
     "fail_region": ("X,Y,W,H@STEP text such as '4,4,6,6@300'", lambda v: _region(v)),
-    "failure_rate": ("a number from 0 up to (not including) 1", lambda v: _rate(v)),
-    **{
-        name: (
-            f"a number that --{name.replace('_', '-')} takes",
-            lambda v, name=name: _accepted(name, v),
-        )
-        for name in NOISE_KEYS
-    },
 }
+"""Keys a sweep spells its own way: plural names, robots counted from 0, layouts by name only,
+one fault event per key, and the coverage curve's sampling."""
+KINDS: dict[str, tuple[str, Callable[[Any], bool]]] = {
+    **{
+        spec.name: (spec.describe(), lambda v, spec=spec: _accepted(spec, v))
+        for spec in SETTINGS
+        if spec.name not in ("shape", "strategy", "seed", "faults", "options")
+    },
+    **OWN_KEYS,
+}
+"""Every key a sweep file may have but `seeds` and ``options.NAME``, with what each of its
+values must be: the run settings and the sweep's own keys."""
 FAULT_KEYS = ("fail", "stall", "fail_region")
 """Sweep keys that each make one fault event of a run (a list of them: one run per value)."""
-"""Every key a sweep file may have but `seeds`, with what each of its values must be."""
+OPTION = "options."
+"""A plug-in option's key in a run's settings and the results: ``options.order``."""
 INTERRUPTED = 130
 """Exit status after Ctrl+C, as a shell reports it."""
 CURVE_EVERY = 10
@@ -122,18 +115,21 @@ def read_sweep(path: Path) -> Sweep:
     so that a mistake is reported at once and not by the hundredth run."""
     path = Path(path)
     data = _read_toml(path)
-    unknown = sorted(set(data) - set(KINDS) - {"seeds"})
+    unknown = sorted(set(data) - set(KINDS) - {"seeds", "options"})
     if unknown:
-        expected = ", ".join(sorted({*KINDS, "seeds"}))
-        raise InputError(f"{path}: unknown key {unknown[0]!r}; expected one of {expected}")
+        expected = ", ".join(sorted({*KINDS, "seeds", "options.NAME"}))
+        hint = ""
+        if option_of(unknown[0]):
+            hint = f" ({unknown[0]} is {option_of(unknown[0])}: write options.{unknown[0]})"
+        raise InputError(f"{path}: unknown key {unknown[0]!r}{hint}; expected one of {expected}")
     for key in ("shapes", "strategies"):
         if key not in data:
             raise InputError(f"{path}: needs {key} = [...]")
-    defaults = RunConfig()
-    values = {"agents": [0], "cells": [defaults.cells], "max_steps": [defaults.max_steps],
-              "order": [defaults.order]}  # fmt: skip
+    values = {"agents": [0], "cells": [RunConfig.cells], "max_steps": [RunConfig.max_steps]}
     for key, value in data.items():
-        if key != "seeds":
+        if key == "options":
+            values |= _option_values(path, value)
+        elif key != "seeds":
             name = {"shapes": "shape", "strategies": "strategy"}.get(key, key)
             kind, fits = KINDS[key]
             values[name] = _values(path, key, value, f"{kind}, or a list of them", fits)
@@ -165,18 +161,31 @@ def _read_toml(path: Path) -> dict[str, Any]:
 
 def _values(path: Path, key: str, value: Any, kind: str, fits: Callable[[Any], bool]) -> list:
     """A key's values as a list (one value or a list of them), each `fits`, none twice (a
-    repeated value would run the same runs twice)."""
-    values = value if isinstance(value, list) else [value]
+    repeated value would run the same runs twice). A list that is itself one value (an
+    arena's [width, height]) is one value."""
+    values = [value] if not isinstance(value, list) or fits(value) else value
     if not values:
         raise InputError(f"{path}: {key} is an empty list; give it at least one value")
-    seen = set()
+    seen = []
     for item in values:
         if not fits(item):
             raise InputError(f"{path}: {key} must be {kind}; got {item!r}")
         if item in seen:
             raise InputError(f"{path}: {key} lists {item!r} twice")
-        seen.add(item)
+        seen.append(item)
     return values
+
+
+def _option_values(path: Path, table: Any) -> dict[str, list]:
+    """``options.NAME = value or [values]``: each a key of the cross product, checked against
+    the strategies' options once the runs are known (see `_check_runs`)."""
+    if not isinstance(table, dict):
+        raise InputError(f"{path}: options must be a table: options.NAME = [values]")
+    plain = ("a plain value", lambda v: isinstance(v, bool | int | float | str))
+    return {
+        OPTION + name: _values(path, OPTION + name, value, "a value or a list of them", plain[1])
+        for name, value in table.items()
+    }
 
 
 def _seeds(path: Path, seeds: Any) -> Sequence[int]:
@@ -189,13 +198,17 @@ def _seeds(path: Path, seeds: Any) -> Sequence[int]:
 
 
 def _check_runs(path: Path, values: dict[str, list]) -> None:
-    """What only a run's description or its shape can tell: strategies, orders, speed limits,
-    images, scenarios and robot counts (checked once per distinct combination)."""
+    """What only a run's description or its shape can tell: strategies and their options,
+    speed limits, images, scenarios and robot counts (checked once per distinct combination)."""
+    options = [name for name in values if name.startswith(OPTION)]
     try:
         for strategy in values["strategy"]:
             registered_strategy(strategy)
-        for order in values["order"]:
-            RunConfig(order=order)
+            for combination in itertools.product(*(values[name] for name in options)):
+                chosen = {
+                    name[len(OPTION) :]: v for name, v in zip(options, combination, strict=True)
+                }
+                RunConfig(strategy=strategy, options=chosen)
         for speed, accel in itertools.product(
             values.get("max_speed", [RunConfig.max_speed]),
             values.get("max_accel", [RunConfig.max_accel]),
@@ -224,16 +237,13 @@ def _region(value: Any) -> bool:
         return False
 
 
-def _accepted(name: str, value: Any) -> bool:
-    """Whether `value` is a number the run option `name` accepts (its own check decides)."""
+def _accepted(spec: Spec, value: Any) -> bool:
+    """Whether `value` is one the run setting `spec` accepts (its own check decides)."""
     try:
-        return _number(value) and bool(RunConfig(**{name: float(value)}))
+        spec.check(value)
     except InputError:
         return False
-
-
-def _rate(value: Any) -> bool:
-    return _number(value) and 0 <= value < 1
+    return True
 
 
 def fault_options(config: dict[str, Any]) -> dict[str, Any]:
@@ -267,8 +277,14 @@ def run_one(config: dict[str, Any], base: Path) -> dict[str, Any]:
     coverage curve, wall time."""
     started = time.perf_counter()
     skip = ("shape", "agents", "curve_every", *FAULT_KEYS)
-    options = {k: v for k, v in config.items() if k not in skip} | fault_options(config)
-    run_config = configure(base / config["shape"], agents=config["agents"] or None, **options)
+    settings = {k: v for k, v in config.items() if k not in skip and not k.startswith(OPTION)}
+    options = {k[len(OPTION) :]: v for k, v in config.items() if k.startswith(OPTION)}
+    run_config = configure(
+        base / config["shape"],
+        agents=config["agents"] or None,
+        options=options,
+        **settings | fault_options(config),
+    )
     curve = CoverageCurve(config.get("curve_every", CURVE_EVERY))
     swarm = run(build(run_config), [curve], run_config.max_steps)
     metrics = run_metrics(swarm)

@@ -24,8 +24,9 @@ from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write, readable_file
 
 FORMAT = "swarmshape state"
-VERSION = 3
-"""3: runs keep their faults (schedule, log, lost robots); 2 could not hold them."""
+VERSION = 4
+"""4: a run keeps its plug-in's options and its senses; 3 kept the paper's order as a run
+setting. 3: runs keep their faults (schedule, log, lost robots); 2 could not hold them."""
 MANIFEST = "manifest"
 MAX_BYTES = 8 * 2**30
 """Largest state, uncompressed: about what a million robots on the largest arena take."""

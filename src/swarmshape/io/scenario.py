@@ -2,10 +2,12 @@
 
 A TOML scenario names its shapes relative to its own folder::
 
-    strategy = "paper"        # optional, like every top-level key
-    order = "outward"
+    strategy = "paper"        # any run setting, optional (swarmshape.config.RunConfig)
     seed = 7
     arena = [40, 24]          # width, height in cells; automatic when left out
+
+    [options]                 # the strategy's own options
+    order = "outward"
 
     [[groups]]
     name = "blue"
@@ -28,9 +30,8 @@ from typing import Any
 import numpy as np
 from PIL import ImageColor
 
-from swarmshape.core.faults import check_rate, events_from_values
 from swarmshape.core.shape import Pose, Shape
-from swarmshape.core.world import START_LAYOUTS, GroupSpec, World
+from swarmshape.core.world import GroupSpec, World
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import DEFAULT_THRESHOLD, grid_for, grid_of, load_grid, read_picture
 from swarmshape.io.files import readable_file
@@ -38,10 +39,6 @@ from swarmshape.io.files import readable_file
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
 
-NOISE_KEYS = ("sense_radius", "distance_noise", "msg_loss", "speed_variation")
-"""How well robots sense, talk and move (numbers; the run checks their ranges)."""
-TOP_KEYS = {"name", "strategy", "order", "seed", "arena", "max_steps", "max_speed", "max_accel",
-            "start", "faults", "failure_rate", *NOISE_KEYS}  # fmt: skip
 GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
 POSE_KEYS = {"x", "y", "rotation"}
 
@@ -61,11 +58,10 @@ class ImageOptions:
 
 @dataclass(frozen=True)
 class Scenario:
-    """The groups to form and the arena; the file's run settings come from `scenario_settings`."""
+    """The groups to form; the file's run settings come from `scenario_settings`."""
 
     name: str
     groups: tuple[GroupSpec, ...]
-    arena: tuple[int, int] | None = None
 
 
 def load_scenario(
@@ -82,7 +78,6 @@ def load_scenario(
     if fit is not None:
         raise ScenarioError(f"{path}: --fit agents sizes one image; set cells per group instead")
     data, where = _read_toml(path)
-    _settings(data, where)  # a mistyped setting is an error wherever the file is read
     groups = data.get("groups")
     if not isinstance(groups, list) or not groups:
         raise ScenarioError(f"{path}: needs at least one [[groups]] table with a shape")
@@ -91,18 +86,19 @@ def load_scenario(
     twice = sorted({name for name in names if names.count(name) > 1})
     if twice:
         raise ScenarioError(f"{path}: two groups are named {twice[0]!r}; give each its own name")
-    arena = None
-    if "arena" in data:
-        arena = where.pair(data["arena"], "arena")
-    return Scenario(str(data.get("name", path.name)), specs, arena)
+    name = where.typed(data.get("name", path.name), str, "name")
+    return Scenario(name, specs)
 
 
 def scenario_settings(path: str | Path) -> dict[str, Any]:
-    """The run settings a scenario file sets (none for an image), without loading its shapes."""
+    """The run settings a scenario file sets (none for an image), as plain values, without
+    loading its shapes: every top-level key but ``name`` and ``groups``, its ``[options]``
+    table included. The run checks them (`swarmshape.config.configure`)."""
     path = Path(path)
     if path.suffix.lower() != ".toml":
         return {}
-    return _settings(*_read_toml(path))
+    data, _ = _read_toml(path)
+    return {key: value for key, value in data.items() if key not in ("name", "groups")}
 
 
 def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
@@ -115,37 +111,7 @@ def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
         raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
     except OSError as error:
         raise ScenarioError(f"{path}: cannot read it ({error.strerror})") from None
-    where = _Where(path)
-    where.known(data, TOP_KEYS | {"groups"}, "top level")
-    return data, where
-
-
-def _settings(data: dict[str, Any], where: _Where) -> dict[str, Any]:
-    """Optional top-level values, checked for type."""
-    settings = {key: data[key] for key in TOP_KEYS - {"name", "arena"} if key in data}
-    for key, kind in (("strategy", str), ("order", str), ("seed", int), ("max_steps", int)):
-        if key in settings:
-            where.typed(settings[key], kind, key)
-    if ":" in settings.get("strategy", ""):
-        raise ScenarioError(
-            f"{where.path}: strategy = {settings['strategy']!r} points at code, and a scenario is "
-            "data: name a registered or installed strategy, or give --strategy on the command line"
-        )
-    for key in ("max_speed", "max_accel", *NOISE_KEYS):
-        if key in settings:
-            settings[key] = float(where.typed(settings[key], (int, float), key))
-    if "start" in settings and settings["start"] not in START_LAYOUTS:
-        raise ScenarioError(
-            f"{where.path}: start = {settings['start']!r}; choose {', '.join(START_LAYOUTS)} "
-            "(a CSV of start cells is given with --start on the command line)"
-        )
-    if "faults" in settings:
-        settings["faults"] = events_from_values(settings["faults"], f"{where.path}: faults")
-    if "failure_rate" in settings:
-        settings["failure_rate"] = check_rate(
-            settings["failure_rate"], f"{where.path}: failure_rate"
-        )
-    return settings
+    return data, _Where(path)
 
 
 def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupSpec:
@@ -215,12 +181,6 @@ class _Where:
             names = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
             raise ScenarioError(f"{self.path}: {key} must be {names}, got {value!r}")
         return value
-
-    def pair(self, value: Any, key: str) -> tuple[int, int]:
-        ok = isinstance(value, list) and len(value) == 2
-        if not ok or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            raise ScenarioError(f"{self.path}: {key} must be two integers [width, height]")
-        return value[0], value[1]
 
 
 def read_start_cells(path: Path, world: World) -> np.ndarray:

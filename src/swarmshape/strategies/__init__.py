@@ -11,9 +11,9 @@ state files are data and name strategies only by registered or installed names. 
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import importlib.util
-import inspect
 import sys
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -21,23 +21,25 @@ from types import ModuleType
 from typing import Any
 
 from swarmshape.core.local import Program
+from swarmshape.core.options import specs
+from swarmshape.core.plugin import Plugin
 from swarmshape.core.steering import Strategy
 from swarmshape.errors import InputError
 
 ENTRY_POINTS = "swarmshape.strategies"
 
-Plugin = type[Strategy] | type[Program]
+REGISTRY: dict[str, type[Plugin]] = {}
+LOADED: dict[Path, ModuleType] = {}
+"""Strategy files run so far, by their resolved paths."""
 
-REGISTRY: dict[str, Plugin] = {}
 
-
-def register(cls: Plugin) -> Plugin:
+def register(cls: type[Plugin]) -> type[Plugin]:
     """Class decorator: make `cls` available by its ``name``."""
     REGISTRY[cls.name] = cls
     return cls
 
 
-def available() -> dict[str, Plugin]:
+def available() -> dict[str, type[Plugin]]:
     """Registered strategies plus those installed packages offer, by name."""
     found = dict(REGISTRY)
     for entry in entry_points(group=ENTRY_POINTS):
@@ -51,7 +53,7 @@ def is_code(name: str) -> bool:
     return ":" in name
 
 
-def get(name: str) -> Plugin:
+def get(name: str) -> type[Plugin]:
     """The plug-in class called `name`, or found at ``file.py:Class`` or ``module:Class``."""
     if is_code(name):
         cls = _import(name)
@@ -67,18 +69,28 @@ def get(name: str) -> Plugin:
         )
     if not isinstance(getattr(cls, "name", None), str):
         raise InputError(f"strategy {name!r} has no name; a plug-in class sets name = '...'")
+    if not dataclasses.is_dataclass(cls.Options):
+        raise InputError(f"strategy {name!r}: its Options must be a @dataclass(frozen=True)")
     return cls
 
 
-def create(strategy: str | Plugin, **options: Any) -> Strategy | Program:
-    """A new plug-in (by name or class), given those of `options` its constructor accepts
-    (``order`` for the paper's strategy, ``senses`` for local programs)."""
+def create(strategy: str | type[Plugin], options: Any = None) -> Plugin:
+    """A new plug-in (by name or class) with its `options` (an instance of its ``Options``;
+    None: the defaults)."""
     cls = strategy if isinstance(strategy, type) else get(strategy)
-    accepted = inspect.signature(cls).parameters
-    return cls(**{key: value for key, value in options.items() if key in accepted})
+    return cls(options)
 
 
-def _import(spec: str) -> Plugin:
+def owners_of(option_name: str) -> list[str]:
+    """The registered and installed plug-ins that declare an option called `option_name`."""
+    return sorted(
+        name
+        for name, cls in available().items()
+        if any(spec.name == option_name for spec in specs(cls.Options))
+    )
+
+
+def _import(spec: str) -> type[Plugin]:
     module_name, _, attribute = spec.rpartition(":")
     if module_name.endswith(".py"):
         module = _load_file(Path(module_name), spec)
@@ -101,12 +113,15 @@ def _load_file(path: Path, spec: str) -> ModuleType:
         raise InputError(f"strategy {spec!r}: cannot read {path} ({error.strerror})") from None
     if not is_file:
         raise InputError(f"strategy {spec!r}: no such file {path}")
-    name = f"swarmshape_strategy_{path.stem}"
-    found = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(found)
-    sys.modules[name] = module  # so that its classes can be found again, e.g. by name
-    found.loader.exec_module(module)
-    return module
+    key = path.resolve()
+    if key not in LOADED:  # once per process: a file may keep state at module level
+        name = f"swarmshape_strategy_{path.stem}"
+        found = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(found)
+        sys.modules[name] = module  # so that its classes can be found again, e.g. by name
+        found.loader.exec_module(module)
+        LOADED[key] = module
+    return LOADED[key]
 
 
 from swarmshape.strategies import (  # noqa: E402,F401  (built-ins)

@@ -10,7 +10,7 @@ quarter). The core moves everyone at once and passes walled-in targets inward by
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -29,7 +29,8 @@ class OneShot(Strategy):
 
     match: ClassVar[Matcher]
 
-    def __init__(self) -> None:
+    def __init__(self, options: Any = None) -> None:
+        super().__init__(options)
         self._planned = np.zeros(0, dtype=np.int64)
         """Each robot's target, until it is sent off (-1: sent, or none)."""
         self._leaves_at = np.zeros(0, dtype=np.int64)

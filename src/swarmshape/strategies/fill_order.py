@@ -13,12 +13,12 @@ import numpy as np
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
+from swarmshape.core.motion import STEPS
 from swarmshape.core.world import World, WorldError
 from swarmshape.errors import InputError
 
 ORDERS = ("outward", "left-to-right", "random")
 DEFAULT_ORDER = ORDERS[0]
-STEPS = np.array([[1, 0], [-1, 0], [0, 1], [0, -1]])
 
 
 def fill_sequence(world: World, group: int, order: str, rng: np.random.Generator) -> np.ndarray:
@@ -106,7 +106,7 @@ def safe_sequence(world: World, group: int, rank: np.ndarray) -> np.ndarray:
             continue
         peeled[i] = True
         removal.append(i)
-        for x, y in cells[i] + STEPS:
+        for x, y in cells[i] + STEPS[1:]:
             if not (0 <= x < width and 0 <= y < height):
                 continue
             if index[x, y] >= 0 and not peeled[index[x, y]]:

@@ -19,7 +19,7 @@ import numpy as np
 from scipy import ndimage
 
 from swarmshape.core.local import Memory, Program, Slot
-from swarmshape.core.motion import STEPS
+from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
 from swarmshape.core.perception import Blueprint, Perception, box_lookup
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
@@ -106,13 +106,6 @@ TABU = 10
 its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
 straight back from the one that pushed it, by the distance rule."""
 
-REVERSE = np.array([0, 2, 1, 4, 3])
-"""The opposite of each direction index."""
-
-DIRECTION_OF = np.zeros((3, 3), dtype=np.int64)
-DIRECTION_OF[STEPS[:, 0] + 1, STEPS[:, 1] + 1] = np.arange(len(STEPS))
-"""The direction index of each unit step ``(dx, dy)``, at ``[dx + 1, dy + 1]``."""
-
 BIG = 1 << 40
 """Farther than any cell."""
 
@@ -176,15 +169,15 @@ class LocalSwap(Program):
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
         seeking = memory.localised & ~memory.has_goal
-        sight, open_cell, by_shape = _open_in_sight(sense, memory, self.senses.radius)
-        news, news_hops = _relay_open(sense, memory, self.senses.radius, sight, open_cell)
+        sight, open_cell, by_shape = _open_in_sight(sense, memory, sense.radius)
+        news, news_hops = _relay_open(sense, memory, sense.radius, sight, open_cell)
         target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
         unaware = seeking & (news_hops >= FAR) & ~open_cell
         memory.unaware = np.where(unaware, memory.unaware + 1, 0)
         searching = by_shape & sense.ready & (memory.unaware > SEARCH_AFTER)
         unaware = np.flatnonzero(unaware & (~by_shape | searching))
         target[unaware] = _search_target(
-            sense, memory, unaware, searching[unaware], self.senses.radius, rng
+            sense, memory, unaware, searching[unaware], sense.radius, rng
         )
         here = _same(target, memory.frame)
         resting = memory.has_goal & _same(memory.goal, memory.frame)
@@ -203,14 +196,14 @@ class LocalSwap(Program):
         going = (has_goal | seeking) & ~_same(memory.frame, target)
         same_aim = _same(target, memory.aim)
         _note_progress(memory, target)
-        waypoint = _route(sense, memory, target, going & sense.ready, same_aim, self.senses.radius)
+        waypoint = _route(sense, memory, target, going & sense.ready, same_aim, sense.radius)
         arrived = ~_same(sense.moved, STEPS[0])
         back = -sense.moved[arrived]
         memory.came[arrived] = DIRECTION_OF[back[:, 0] + 1, back[:, 1] + 1]
         behind = occupied.copy()
         behind[np.arange(len(sense)), memory.came] = True
         delta = waypoint - memory.frame
-        preferred, first = _plan(sense, delta, behind, going, self.senses.radius)
+        preferred, first = _plan(sense, delta, behind, going, sense.radius)
         memory.wants = _choose_partner(
             sense, memory, preferred, target, seeking, news, news_hops, rested, silent
         )
@@ -228,7 +221,8 @@ class LocalSwap(Program):
         moves[roaming] = _roam(sense, memory, occupied, roaming, rng)
         wander = lost & ~roaming & (moves == 0) & (rng.random(len(sense)) < 0.5)
         moves[wander] = _random_free(occupied[wander], rng)
-        memory.asked = np.where(sense.ready, moves, 0)
+        moves = np.where(sense.ready, moves, 0)  # it moves a cell at a time, from rest
+        memory.asked = moves
         stays = sense.ready & (moves == 0)
         messages = np.column_stack(
             [

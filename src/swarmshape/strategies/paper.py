@@ -13,6 +13,7 @@ outward, until it can be reached.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -20,6 +21,7 @@ from scipy import ndimage
 
 from swarmshape.core.messages import SEEDS
 from swarmshape.core.motion import STEPS, Motion
+from swarmshape.core.options import option
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import LOST, MOVING, SETTLED, WANDERING
 from swarmshape.core.steering import Strategy, SwarmView
@@ -33,8 +35,16 @@ class Paper(Strategy):
     motion: ClassVar[Motion] = Motion.ROUTE
     description: ClassVar[str] = "one mover per group at a time, targets handed on by message"
 
-    def __init__(self, order: str = DEFAULT_ORDER) -> None:
-        self.order = order
+    @dataclass(frozen=True)
+    class Options:
+        order: str = option(
+            DEFAULT_ORDER,
+            "the target function: outward from the seeds, left-to-right, or random",
+            choices=ORDERS,
+        )
+
+    def __init__(self, options: Options | None = None) -> None:
+        super().__init__(options)
         self._sequence: list[np.ndarray] = []
         self._next: list[int] = []
         self._repairing: list[int] = []
@@ -84,7 +94,7 @@ class Paper(Strategy):
         taken[[m.target for m in swarm.pending]] = True
         self._sequence = []
         for g in range(len(world.groups)):
-            sequence = first[g] + fill_sequence(world, g, self.order, swarm.rng)
+            sequence = first[g] + fill_sequence(world, g, self.options.order, swarm.rng)
             self._sequence.append(sequence[~taken[sequence]])
         self._next = [0] * len(world.groups)
 
@@ -92,8 +102,6 @@ class Paper(Strategy):
         """Take the saved fill orders back, checked against the world they order."""
         super().restore(saved, swarm)
         groups, targets = len(swarm.world.groups), len(swarm.targets)
-        if self.order not in ORDERS:
-            raise saved.error("order", f"is {self.order!r}, not one of {', '.join(ORDERS)}")
         if len(self._repairing) != groups or not all(r in (0, 1) for r in self._repairing):
             raise saved.error("_repairing", f"does not have one flag per group ({groups})")
         if len(self._sequence) != groups or len(self._next) != groups:

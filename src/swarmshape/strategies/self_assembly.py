@@ -14,7 +14,7 @@ alone, and `stopped`, for one that walked round everything without finding a pla
   estimate between fixes;
 - **leaving one at a time**: a waiting robot starts to move only when no moving robot is within
   sensing range and its gradient is greater than every non-joined neighbour's (ties: the higher
-  ID); a robot that has lately missed messages waits for that `LOSSY_PATIENCE` steps in a row
+  ID); a robot that has lately missed messages waits for that ``lossy_patience`` steps in a row
   (so a lost message rarely lets it go beside a mover), others at once;
 - **edge-following**: a right-hand wall follower around the stationary robots (turn right,
   straight, left, back; the next cell must touch a stationary robot), waiting behind a moving
@@ -29,12 +29,15 @@ and position warp the shape more the farther it grows from the seeds.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from scipy import ndimage
 
-from swarmshape.core.local import Memory, Program, Slot
+from swarmshape.core.local import Memory, Program, Schema, Slot
+from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
+from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
 
@@ -42,39 +45,22 @@ START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
 STATIONARY = (START, WAIT, JOINED, STOPPED)
 
-STATE, GRADIENT, LOCALISED, X, Y, NUMBER, WANT = range(7)
-"""What a robot broadcasts, in order: its state plus one (0 is a robot that has not spoken
-yet), gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID, and
-the direction a blocked follower waits to move in (0 if none)."""
+MESSAGE = Schema(state=1, gradient=1, localised=1, position=2, number=1, want=1)
+"""What a robot broadcasts: its state plus one (0 is a robot that has not spoken yet),
+gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its ID, and the
+direction a blocked follower waits to move in (0 if none)."""
 
 FIXED = 1024
 INFINITE = 1 << 30
 """The gradient of a robot connected to no seed."""
 
-STARTUP = 4
-"""Steps a robot only listens before it may act."""
-PATIENCE = 1
-"""Steps in a row a waiting robot must find itself first in line before it leaves, when every
-neighbour's message arrives: one, since a robot that left is heard moving the next step."""
-LOSSY_PATIENCE = 8
-"""The same for a robot that has lately missed a neighbour's message: a moving neighbour must
-go unheard this many steps in a row before the robot trusts that none is near (at 10% loss,
-three lost messages in a row happen often enough in a run to let a robot leave beside a
-mover, pull the wall from under it, and leave two followers nose to nose for good)."""
-LOSS_MEMORY = 20
-"""Steps a robot remembers that it missed a neighbour's message."""
-ALONE = 150
-"""Steps a waiting robot with no gradient waits before it walks off at random to find one."""
+NEVER = 1 << 30
+"""Steps since a robot last missed a message, for one that never has."""
+
 
 # The 5x5 window around a robot, row-major over dy then dx, each -2..2; slot 12 is its own cell.
 WINDOW = np.array([(dx, dy) for dy in range(-2, 3) for dx in range(-2, 3)], dtype=np.int64)
 SELF = 12
-DIRECTION = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=np.int64)
-"""Move index -> unit step (the order of `swarmshape.core.motion.STEPS`)."""
-RIGHT = np.array([0, 3, 4, 2, 1])
-"""The direction a quarter turn clockwise on screen (y down): east -> south -> west -> north."""
-LEFT = np.array([0, 4, 3, 1, 2])
-BACK = np.array([0, 2, 1, 4, 3])
 
 
 def _slot(step: np.ndarray) -> np.ndarray:
@@ -82,7 +68,7 @@ def _slot(step: np.ndarray) -> np.ndarray:
     return (step[..., 1] + 2) * 5 + (step[..., 0] + 2)
 
 
-AROUND = np.array([[_slot(DIRECTION[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 7, 8, 11, 13, 16,
+AROUND = np.array([[_slot(STEPS[d] + WINDOW[s] - WINDOW[SELF]) for s in (6, 7, 8, 11, 13, 16,
                    17, 18)] for d in range(5)])  # fmt: skip
 """``[d]``: the window slots of the 8 cells around the cell one step in direction d (the
 robot's own cell among them for d > 0)."""
@@ -101,10 +87,38 @@ SIDES_IN_A_WINDOW = np.stack([np.zeros((3, 3), bool), ndimage.generate_binary_st
 class SelfAssembly(Program):
     name = "self-assembly"
     description = "gradient, localisation and edge-following (Rubenstein, Cornejo & Nagpal 2014)"
-    message_size = 7
+    message_size = len(MESSAGE)
     states = STATES
     grows_from_seeds = True
     shown = "gradient"
+
+    @dataclass(frozen=True)
+    class Options:
+        startup: int = option(4, "steps a robot only listens before it may act", at_least=0)
+        patience: int = option(
+            1,
+            "steps in a row a waiting robot must find itself first in line before it leaves, "
+            "when every neighbour's message arrives (a robot that left is heard moving the "
+            "next step)",
+            at_least=1,
+        )
+        lossy_patience: int = option(
+            8,
+            "the same for a robot that has lately missed a neighbour's message: a moving "
+            "neighbour must go unheard this many steps in a row before it trusts that none is "
+            "near (at 10 % loss three lost messages in a row let a robot leave beside a mover)",
+            at_least=1,
+        )
+        loss_memory: int = option(
+            20, "steps a robot remembers that it missed a neighbour's message", at_least=0
+        )
+        alone: int = option(
+            150,
+            "steps a waiting robot with no gradient waits before it walks off at random to "
+            "find one",
+            at_least=0,
+        )
+
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
         "gradient": Slot(np.int64, INFINITE),
@@ -113,7 +127,7 @@ class SelfAssembly(Program):
         "heading": Slot(np.int64, 0),
         "age": Slot(np.int64, 0),
         "eligible": Slot(np.int64, 0),
-        "since_loss": Slot(np.int64, LOSS_MEMORY),
+        "since_loss": Slot(np.int64, NEVER),
         "travelled": Slot(np.int64, 0),
         "want": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
@@ -127,7 +141,7 @@ class SelfAssembly(Program):
         memory.age += 1
         _odometry(sense, memory, moved)
         state = memory.state
-        state[(state == START) & (memory.age > STARTUP)] = WAIT
+        state[(state == START) & (memory.age > self.options.startup)] = WAIT
         near = _Near(sense)
         rows = _busy(near, memory)
         _settled_gradient(near, memory, rows)
@@ -138,22 +152,19 @@ class SelfAssembly(Program):
             mine = _Rows(memory, rows)
             moved_rows = np.zeros(len(rows), dtype=np.int64)
             _gradient(view, mine)
-            _leave(view, mine, moved_rows, rng)
+            _leave(view, mine, self.options)
             _follow(view, _Where(sense, rows), mine, moved_rows)
             _wander(view, mine, moved_rows, rng)
             mine.write_back()
             moves[rows] = moved_rows
-        position = np.rint(memory.position * FIXED).astype(np.int64)
-        messages = np.column_stack(
-            [
-                memory.state + 1,
-                memory.gradient,
-                memory.localised,
-                position,
-                sense.number,
-                memory.want,
-            ]
-        ).astype(np.int64)
+        messages = MESSAGE.pack(
+            state=memory.state + 1,
+            gradient=memory.gradient,
+            localised=memory.localised,
+            position=np.rint(memory.position * FIXED),
+            number=sense.number,
+            want=memory.want,
+        )
         return moves, messages
 
     def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
@@ -179,19 +190,19 @@ class _Near:
         self.slot = (self.cy + 2) * 5 + (self.cx + 2)
         self.kin = sense.kin[e]
         self.seed = sense.seed[e] & self.kin  # another group's seeds are only obstacles
-        said = np.take(sense.message, e, axis=0)  # see `LocalControl.perceive` (1)
-        state = said[:, STATE] - 1
+        said = MESSAGE.read(np.take(sense.message, e, axis=0))  # `LocalControl.perceive` (1)
+        state = said.state - 1
         self.spoke = sense.heard[e] & self.kin & ~self.seed & (state >= 0)
         self.state = state
         self.stays = (state <= WAIT) | (state >= JOINED)
-        self.gradient = np.minimum(said[:, GRADIENT], INFINITE)
+        self.gradient = np.minimum(said.gradient, INFINITE)
         n = len(sense)
         touching = TOUCHING[self.slot]
         self.crowded = np.bincount(self.me[touching], minlength=n) >= 8
-        want = said[:, WANT]
+        want = said.want
         # a moving neighbour that waits to step into the robot's own cell
-        asking = np.flatnonzero(self.spoke & ~self.stays & (want > 0) & (want < len(DIRECTION)))
-        aim = DIRECTION[want[asking]]
+        asking = np.flatnonzero(self.spoke & ~self.stays & (want > 0) & (want < len(STEPS)))
+        aim = STEPS[want[asking]]
         self.facing = np.zeros(len(e), dtype=bool)
         self.facing[asking] = (self.cx[asking] == -aim[:, 0]) & (self.cy[asking] == -aim[:, 1])
         unheard = ~sense.heard & sense.kin & ~sense.seed
@@ -272,15 +283,16 @@ class _View:
         pick = np.flatnonzero(index[sense.owner] >= 0)
         me = index[sense.owner[pick]]
         seed = sense.seed[pick]
-        state = sense.message[pick, STATE] - 1
+        said = MESSAGE.read(sense.message)
+        state = said.state[pick] - 1
         spoke = sense.heard[pick] & sense.kin[pick] & ~seed & (state >= 0)
         stays = (state <= WAIT) | (state >= JOINED)
         self.mover_near = np.zeros(a, dtype=bool)
         self.mover_near[me[spoke & ~stays]] = True
-        gradient = np.minimum(sense.message[pick, GRADIENT], INFINITE)
+        gradient = np.minimum(said.gradient[pick], INFINITE)
         mine = memory.gradient[rows][me]
         ahead = spoke & (state <= WAIT) & (gradient >= mine)
-        ahead &= (gradient > mine) | (sense.message[pick, NUMBER] > sense.number[rows][me])
+        ahead &= (gradient > mine) | (said.number[pick] > sense.number[rows][me])
         self.outranked = np.zeros(a, dtype=bool)
         self.outranked[me[ahead]] = True
         # the nearest seed or gradient-holding stationary robot heard (entries run nearest first)
@@ -341,7 +353,7 @@ def _odometry(sense: Perception, memory: Memory, moved: np.ndarray) -> None:
     """Dead reckoning: a localised robot adds the cells it moved; its heading is its last move."""
     memory.position[memory.localised] += sense.moved[memory.localised]
     for direction in range(1, 5):
-        went = (sense.moved == DIRECTION[direction]).all(axis=1)
+        went = (sense.moved == STEPS[direction]).all(axis=1)
         memory.heading[went] = direction
     memory.travelled[moved] += 1
 
@@ -361,15 +373,15 @@ def _localise(sense: Perception, memory: Memory) -> None:
     each reference's position less its sensed offset (two are needed for a first fix), and
     move a quarter of the way there (the paper's step); joined robots keep theirs."""
     n = len(sense)
-    msg = sense.message
-    robot = sense.heard & sense.kin & ~sense.seed & (msg[:, STATE] == JOINED + 1)
-    robot &= msg[:, LOCALISED] == 1
+    said = MESSAGE.read(sense.message)
+    robot = sense.heard & sense.kin & ~sense.seed & (said.state == JOINED + 1)
+    robot &= said.localised == 1
     seed = sense.heard & sense.kin & sense.seed
     open_owner = sense.ready & (memory.state != JOINED)
     use = np.flatnonzero((robot | seed) & open_owner[sense.owner])
     me = sense.owner[use]
     reference = np.where(
-        seed[use, None], sense.seed_frame[use].astype(np.float64), msg[use, X : Y + 1] / FIXED
+        seed[use, None], sense.seed_frame[use].astype(np.float64), said.position[use] / FIXED
     )
     estimate = reference - sense.offset[use]
     count = np.bincount(me, minlength=n)
@@ -389,22 +401,23 @@ def _frame_cell(memory: Memory) -> np.ndarray:
     return np.rint(memory.position).astype(np.int64)
 
 
-def _leave(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
-    """Waiting robots with a gradient leave one at a time; those without one for `ALONE`
-    steps, or with no neighbour at all, walk off to find the structure."""
+def _leave(view: _View, memory: Memory, options: SelfAssembly.Options) -> None:
+    """Waiting robots with a gradient leave one at a time; those without one for
+    ``options.alone`` steps, or with no neighbour at all, walk off to find the structure."""
     state = memory.state
     waiting = state == WAIT
     first = waiting & (memory.gradient < INFINITE) & ~view.outranked & ~view.mover_near
     heading = _first_heading(view)
     first &= heading > 0
     memory.eligible = np.where(first, memory.eligible + 1, 0)
-    patience = np.where(memory.since_loss < LOSS_MEMORY, LOSSY_PATIENCE, PATIENCE)
+    lossy = memory.since_loss < options.loss_memory
+    patience = np.where(lossy, options.lossy_patience, options.patience)
     go = first & (memory.eligible >= patience) & view.ready
     state[go] = OUTSIDE
     memory.heading[go] = heading[go]
     memory.travelled[go] = 0
     lonely = waiting & (memory.gradient >= INFINITE)
-    lonely &= (memory.age > ALONE) | ~view.taken[:, NEAR8].any(axis=1)
+    lonely &= (memory.age > options.alone) | ~view.taken[:, NEAR8].any(axis=1)
     state[lonely] = WANDER
 
 
@@ -415,11 +428,9 @@ def _first_heading(view: _View) -> np.ndarray:
     heading = np.zeros(n, dtype=np.int64)
     for pick in ("side", "corner"):
         for d in (1, 3, 2, 4):
-            ahead = _slot(DIRECTION[d])
-            if pick == "side":
-                wall = _slot(DIRECTION[RIGHT[d]])
-            else:
-                wall = _slot(DIRECTION[d] + DIRECTION[RIGHT[d]])
+            ahead = _slot(STEPS[d])
+            side = STEPS[RIGHT[d]]
+            wall = _slot(side if pick == "side" else STEPS[d] + side)
             fits = (heading == 0) & ~view.taken[:, ahead] & view.stationary[:, wall]
             heading[fits] = d
     return heading
@@ -438,9 +449,9 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     choice = np.zeros(n, dtype=np.int64)
     way = np.zeros(n, dtype=np.int64)  # the same, passing by a follower that faces this one
     heading = np.where(memory.heading > 0, memory.heading, 1)
-    for turn in (RIGHT, np.arange(5), LEFT, BACK):
+    for turn in (RIGHT, np.arange(5), LEFT, REVERSE):
         d = turn[heading]
-        target = _slot(DIRECTION[d])
+        target = _slot(STEPS[d])
         wall = view.stationary[rows, target]
         contact = view.stationary[rows[:, None], AROUND[d]].any(axis=1)
         fits = (choice == 0) & ~wall & contact
@@ -454,13 +465,13 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     mine = np.where(least >= INFINITE, INFINITE, least + 1)
     layer_end = (view.joined[:, four] & (view.gradient[:, four] >= mine[:, None])).any(axis=1)
     layer_end &= mine < INFINITE
-    next_cell = cell + DIRECTION[choice]
+    next_cell = cell + STEPS[choice]
     leaves = ~sense.blueprint.contains(sense.group, next_cell) | (choice == 0)
     # never seal a pocket of the shape: step into it instead (see `_pocket`)
     stopping = np.flatnonzero(inside & (layer_end | leaves))
     sealed = np.zeros(len(choice), dtype=np.int64)
     for d in range(1, 5):
-        beside = cell[stopping] + DIRECTION[d]
+        beside = cell[stopping] + STEPS[d]
         pocket = _pocket(view.stationary[stopping], d)
         pocket &= sense.blueprint.contains(sense.group[stopping], beside)
         sealed[stopping[(sealed[stopping] == 0) & pocket]] = d
@@ -468,7 +479,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     way = np.where(sealed > 0, sealed, way)
     state[join] = JOINED
     memory.gradient[join] = mine[join]
-    blocked = view.taken[rows, _slot(DIRECTION[way])]
+    blocked = view.taken[rows, _slot(STEPS[way])]
     step = going & ~join & (way > 0) & ~blocked
     moves[step] = way[step]
     memory.want = np.where(going & ~join & (way > 0) & blocked, way, 0)
@@ -496,7 +507,7 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     free = ~stationary.reshape(a, 5, 5)
     free[:, 2, 2] = False
     start = np.zeros((a, 5, 5), dtype=bool)
-    start[:, 2 + DIRECTION[d, 1], 2 + DIRECTION[d, 0]] = True
+    start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
     reach = ndimage.binary_propagation(start & free, structure=SIDES_IN_A_WINDOW, mask=free)
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
@@ -514,7 +525,7 @@ def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Gener
     noise[:, 3] += 2.0 * (by > 0) + (np.abs(by) > np.abs(bx)) * (by > 0)
     noise[:, 4] += 2.0 * (by < 0) + (np.abs(by) > np.abs(bx)) * (by < 0)
     for d in range(1, 5):
-        noise[view.taken[:, _slot(DIRECTION[d])], d] = -1.0
+        noise[view.taken[:, _slot(STEPS[d])], d] = -1.0
     choice = noise.argmax(axis=1)
     walking &= noise.max(axis=1) > 0.5
     moves[walking] = choice[walking]

@@ -6,12 +6,15 @@ drawing along. `Editor.shape` turns the painting into a shape in the seed frame.
 
 Saving never replaces a user's file unasked: only the editor's own PNGs (their text chunk says
 so, see `is_drawing`) are saved over without a question; anything else, and any existing file
-under a typed name, needs a yes in the window, and autosaves always get a fresh name.
+under a typed name, needs a yes in the window, and autosaves always get a fresh name, beside
+the user's file or in their data folder, never among the shipped shapes or in the package.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
+import sys
 import tempfile
 from collections import deque
 from collections.abc import Callable
@@ -22,6 +25,7 @@ import pygame
 from PIL import Image
 from scipy import ndimage
 
+from swarmshape.config import bundled_shapes
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
 from swarmshape.core.world import World
 from swarmshape.errors import InputError
@@ -137,6 +141,29 @@ def is_drawing(path: Path) -> bool:
             return image.format == "PNG" and image.info.get(EDITOR_TAG) == "1"
     except (OSError, ValueError, Image.DecompressionBombError):
         return False
+
+
+def data_folder() -> Path:
+    """The user's own folder for swarmshape's data: ``$XDG_DATA_HOME/swarmshape`` (by default
+    ``~/.local/share/swarmshape``) on Linux and other Unixes, ``~/Library/Application
+    Support/swarmshape`` on macOS, ``%LOCALAPPDATA%\\swarmshape`` on Windows."""
+    home = Path.home()
+    if sys.platform == "win32":
+        base = os.environ.get("LOCALAPPDATA") or home / "AppData" / "Local"
+    elif sys.platform == "darwin":
+        base = home / "Library" / "Application Support"
+    else:
+        base = os.environ.get("XDG_DATA_HOME", "")
+        base = base if Path(base).is_absolute() else home / ".local" / "share"  # as XDG says
+    return Path(base) / "swarmshape"
+
+
+def shipped(path: Path) -> bool:
+    """Whether `path` is one of the shapes that come with swarmshape, or inside the package:
+    places that an update replaces, and no place for a user's work."""
+    where = Path(os.path.realpath(path))
+    package = Path(os.path.realpath(__file__)).parents[1]
+    return any(where.is_relative_to(os.path.realpath(p)) for p in (bundled_shapes(), package))
 
 
 def fresh_path(path: Path) -> Path:
@@ -442,13 +469,22 @@ class Editor:
         return True
 
     def autosave(self) -> Path | None:
-        """Keep unsaved work as NAME.autosave.png beside the file (or in the temporary folder
-        if that fails) under a name nothing has yet; return where, or None."""
+        """Keep unsaved work as NAME.autosave.png under a name nothing has yet: beside the
+        user's file, or in their data folder (`data_folder`) for an untitled drawing, one of the
+        shipped shapes, or a folder that cannot be written; the temporary folder is the last
+        resort. Return where, or None."""
         if not self.dirty or self.shape() is None:
             return None
         shown = self.path or self.source
         name = f"{shown.stem if shown else 'untitled'}.autosave.png"
-        for folder in (self._folder(), Path(tempfile.gettempdir())):
+        ours = data_folder() / "autosaves"
+        beside = [] if shown is None or shipped(shown) else [shown.parent]
+        for folder in (*beside, ours, Path(tempfile.gettempdir())):
+            try:
+                if folder == ours:
+                    ours.mkdir(parents=True, exist_ok=True)  # made only when it is needed
+            except OSError:
+                continue
             target = fresh_path(folder / name)
             if self._write(target):
                 return target

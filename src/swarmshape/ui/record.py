@@ -1,9 +1,11 @@
-"""Recording a run: an animation (GIF, WebP, APNG) or numbered PNG frames, drawn offscreen.
+"""Recording a run: an animation (GIF, WebP, APNG), an MP4 video, or numbered PNG frames,
+drawn offscreen.
 
 Each frame has a line of text with its step and coverage, so a frame read on its own says when
 it was taken. Frames are kept as small palette images; when a long run would pass `MAX_FRAMES`
 (fewer for large frames, see `FRAME_PIXELS`), every other frame is dropped and the stride
-doubles, so the file and the memory it takes stay a sane size.
+doubles, so the file and the memory it takes stay a sane size. An MP4 holds the same frames,
+encoded as H.264 by the ffmpeg that the ``video`` extra's imageio-ffmpeg wheel ships.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 from PIL import Image
 
 from swarmshape.core.swarm import Swarm
@@ -19,7 +22,10 @@ from swarmshape.io.files import atomic_write
 from swarmshape.runs import Observer
 from swarmshape.ui.render import Renderer, frame
 
-ANIMATIONS = {".gif": "GIF", ".webp": "WEBP", ".png": "PNG"}
+ANIMATIONS = {".gif": "GIF", ".webp": "WEBP", ".png": "PNG", ".mp4": "MP4"}
+VIDEO = ("-crf", "23", "-tune", "animation", "-movflags", "+faststart")
+"""ffmpeg's H.264 options: its default quality, tuned for flat colours; playable while it
+downloads."""
 MAX_FRAMES = 400
 FRAME_SIZE = (640, 400)
 """The default frame size (``--record-size``)."""
@@ -56,6 +62,8 @@ class Recorder(Observer):
             raise InputError(
                 f"{animation}: --record writes {', '.join(ANIMATIONS)} files; pick one of those"
             )
+        if animation is not None and animation.suffix.lower() == ".mp4":
+            _encoder(animation)  # refused now, not after the run
         if frames is not None:
             if frames.exists() and not frames.is_dir():
                 raise InputError(f"{frames}: --frames needs a folder, and this is a file")
@@ -95,10 +103,48 @@ class Recorder(Observer):
                     stale.unlink()
         if self.animation is None or not self._images:
             return
+        form = ANIMATIONS[self.animation.suffix.lower()]
+        if form == "MP4":
+            atomic_write(self.animation, self._video)
+            return
         first, *rest = self._images
         options = {"save_all": True, "append_images": rest, "duration": FRAME_MS, "loop": 0}
-        form = ANIMATIONS[self.animation.suffix.lower()]
         atomic_write(self.animation, lambda tmp: first.save(tmp, format=form, **options))
+
+    def _video(self, path: str) -> None:
+        """The frames as an H.264 MP4 at the animations' pace, each padded to even sides
+        (which H.264's colour format needs) by repeating its last row and column."""
+        width, height = self.size
+        even = (width + width % 2, height + height % 2)
+        writer = _encoder(self.animation).write_frames(
+            path,
+            even,
+            fps=1000 / FRAME_MS,
+            codec="libx264",
+            quality=None,
+            macro_block_size=2,
+            ffmpeg_log_level="error",
+            output_params=list(VIDEO),
+        )
+        writer.send(None)  # starts ffmpeg
+        try:
+            for image in self._images:
+                pixels = np.asarray(image.convert("RGB"))
+                padding = ((0, even[1] - height), (0, even[0] - width), (0, 0))
+                writer.send(np.ascontiguousarray(np.pad(pixels, padding, mode="edge")))
+        finally:
+            writer.close()
+
+
+def _encoder(path: Path):
+    """imageio-ffmpeg, or one clear line saying how to get it."""
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise InputError(
+            f"{path}: --record .mp4 needs the video extra: pip install 'swarmshape[video]'"
+        ) from None
+    return imageio_ffmpeg
 
 
 def caption(swarm: Swarm) -> str:

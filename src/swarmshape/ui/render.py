@@ -6,16 +6,18 @@ slightly darker once settled, pale while waiting or wandering; stalled robots ar
 where a fault removed robots a red cross shows for `LOST_MARK_STEPS` steps.
 
 A local program that names its `states` has its robots coloured by ``memory.state`` instead,
-from `PALETTE` (`legend` lists the pairs). Overlays, each optional, go on top: ``"values"``
-prints the program's `shown` memory slot on each robot, ``"links"`` draws a line for every
-message heard in the last step, ``"error"`` a red line from each localised robot to where it
-believes it is.
+from `PALETTE`; `legend` says what every colour on the arena means, for any plug-in.
+Overlays, each optional, go on top: ``"values"`` prints the program's `shown` memory slot on
+each robot, ``"links"`` draws a line for every message heard in the last step, ``"error"`` a
+red line from each localised robot to where it believes it is.
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
 from itertools import pairwise, repeat
+from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pygame
@@ -35,8 +37,11 @@ LOST_RED = (214, 40, 40)
 STALLED_GREY = (64, 64, 70)
 LOST_MARK_STEPS = 60
 """Steps for which a removed robot's last cell is marked."""
-LABEL_SHARE = 1 / 22
-"""A frame's text line is this share of its height (at least 14 pixels)."""
+LABEL_SHARE = 1 / 30
+"""A recorded frame's text is this share of its height (at least 11 pixels)."""
+FONT_FILE = Path(__file__).with_name("fonts") / "DejaVuSans.ttf"
+"""DejaVu Sans, shipped (see fonts/README.md): pygame's own font spaces letters apart at the
+sizes the window and recordings use ("set tled")."""
 
 PALETTE = (  # Okabe and Ito's colour-blind-safe set first; no green, which marks seeds
     (0, 114, 178),  # blue
@@ -70,6 +75,17 @@ SHADES = (  # indexed by State
     lambda rgb: STALLED_GREY,  # stalled: charcoal, whatever the group
     lambda rgb: rgb,  # lost: never drawn
 )
+SHADE_NAMES = ("waiting", "moving", "settled", "wandering")
+"""What the first four `SHADES` show (stalled robots have one colour for every group)."""
+
+
+class Key(NamedTuple):
+    """One line of the legend: a name and its swatches (one per group where groups differ),
+    drawn as squares, or as the red cross that marks a removed robot."""
+
+    name: str
+    colours: tuple[tuple[int, int, int], ...]
+    cross: bool = False
 
 
 class Renderer:
@@ -212,7 +228,7 @@ class Renderer:
         known = (values >= 0) & (values < UNKNOWN)
         centre = np.floor(swarm.positions()[here] * cell + np.array(origin)).astype(int)
         light = np.array([sum(c) < 330 for c in colours])[kind]
-        font = _font(max(8, round(cell * 0.8)))
+        font = font_of(max(6, round(cell * 0.55)))
         blits = []
         for value, (x, y), on_dark in zip(
             values[known].tolist(), centre[known].tolist(), light[known].tolist(), strict=True
@@ -279,7 +295,7 @@ def program_of(swarm: Swarm | None) -> Program | None:
     return driver.program if isinstance(driver, LocalControl) else None
 
 
-def legend(swarm: Swarm | None) -> list[tuple[str, tuple[int, int, int]]]:
+def _program_states(swarm: Swarm | None) -> list[tuple[str, tuple[int, int, int]]]:
     """The program's state names and their colours, when robots are coloured by state."""
     program = program_of(swarm)
     if program is None or not program.states:
@@ -287,11 +303,33 @@ def legend(swarm: Swarm | None) -> list[tuple[str, tuple[int, int, int]]]:
     return [(name, PALETTE[i % len(PALETTE)]) for i, name in enumerate(program.states)]
 
 
+def legend(swarm: Swarm) -> list[Key]:
+    """What every colour on the arena means: a local program's named states, or else what
+    robots are doing, in each group's shade (central strategies, and programs that name no
+    states); then stalled and removed robots, seeds and empty target cells."""
+    named = _program_states(swarm)
+    if named:
+        keys = [Key(name, (colour,)) for name, colour in named]
+    else:
+        groups = [group.colour for group in swarm.world.groups]
+        keys = [
+            Key(name, tuple(dict.fromkeys(shade(colour) for colour in groups)))
+            for name, shade in zip(SHADE_NAMES, SHADES, strict=False)
+        ]
+    return [
+        *keys,
+        Key("stalled", (STALLED_GREY,)),
+        Key("removed", (LOST_RED,), cross=True),
+        Key("seed", (SEED_GREEN,)),
+        Key("empty cell", (TARGET,)),
+    ]
+
+
 def _colours(swarm: Swarm) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
     """Each robot's colour index and the colours: by a local program's ``memory.state`` when it
     names its `states`, else its group's colour shaded by what it is doing (stalled robots are
     charcoal either way)."""
-    named = legend(swarm)
+    named = _program_states(swarm)
     if named:
         colours = [colour for _, colour in named] + [STALLED_GREY]
         kind = np.asarray(swarm.driver.memory.state, dtype=np.int64) % len(named)
@@ -311,7 +349,7 @@ def frame(
     surface = pygame.Surface(size)
     area = surface.get_rect()
     if label is not None:
-        font = _font(max(14, round(size[1] * LABEL_SHARE)))
+        font = font_of(max(11, round(size[1] * LABEL_SHARE)))
         strip = pygame.Rect(0, 0, size[0], font.get_linesize() + 2)
         surface.fill(LABEL_BACK, strip)
         surface.blit(font.render(label, True, LABEL_TEXT), (4, 1))
@@ -320,11 +358,11 @@ def frame(
     return np.ascontiguousarray(pygame.surfarray.array3d(surface).transpose(1, 0, 2))
 
 
-def _font(height: int) -> pygame.font.Font:
-    """pygame's own font at a pixel height (no display needed). Made afresh each time, a
-    quarter of a millisecond: a kept one dies with any `pygame.quit`."""
+def font_of(size: int) -> pygame.font.Font:
+    """The shipped font at `size` pixels (a line is about 1.2 times that; no display needed).
+    Made afresh each time, a quarter of a millisecond: a kept one dies with any `pygame.quit`."""
     pygame.font.init()
-    return pygame.font.Font(None, height)
+    return pygame.font.Font(FONT_FILE, size)
 
 
 def _margins(area: pygame.Rect, inner: pygame.Rect) -> list[pygame.Rect]:

@@ -1,15 +1,20 @@
 """The window: main loop, keys, heads-up display, screenshots, and the editor on top.
 
-Each call of `Viewer.tick` handles pending events, advances the simulation by the current
-speed, and draws one frame, so tests can post events and drive it frame by frame under
-``SDL_VIDEODRIVER=dummy``. While nothing can change without the user (paused, formed with
-every robot at rest, no swarm yet) a tick waits for an event instead, and draws only if one
-came, so an idle window costs no CPU. `e` switches into the editor while the swarm keeps
-running; Enter (or `e` again) hands the painted shape to the swarm, or starts one if none runs
-yet. `x` toggles the fault tool: a click removes the robot under the cursor, a drag removes
-every robot in the rectangle. Under a local program, robots take the colours of its states (a
-legend in the corner names them) and `g`, `l`, `o` toggle the overlays: its gradient values,
-its communication links, and its localisation error.
+The window drives a `runs.Runner`, the loop every run goes through: its observers (recorders,
+traces) see each step, it stops at its `max_steps`, and it says when the run is `finished`.
+Each call of `Viewer.tick` handles pending events, advances the run by the current speed, and
+draws one frame, so tests can post events and drive it frame by frame under
+``SDL_VIDEODRIVER=dummy``. While nothing can change without the user (paused, finished with
+every robot at rest, out of steps, no swarm yet) a tick waits for an event instead, and draws
+only if one came, so an idle window costs no CPU; the HUD says why it is idle. `e` switches
+into the editor while the swarm keeps running; Enter (or `e` again) hands the painted shape to
+the swarm, or starts one if none runs yet. `x` toggles the fault tool: a click removes the
+robot under the cursor, a drag removes every robot in the rectangle. Under a local program,
+robots may take the colours of its states, and `g`, `l`, `o` toggle the overlays: its gradient
+values, its communication links, and its localisation error.
+
+The HUD is a bar at the top (the status; then a notice, or what runs) and one at the bottom
+(the legend of every colour on the arena, then the keys), each wrapped to the window's width.
 """
 
 from __future__ import annotations
@@ -27,8 +32,17 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write
+from swarmshape.runs import Observer, Runner
 from swarmshape.ui.editor import HELP_LINES, Canvas, Editor
-from swarmshape.ui.render import VALUE_MIN_CELL, Renderer, legend, program_of
+from swarmshape.ui.render import (
+    FLOOR,
+    VALUE_MIN_CELL,
+    Key,
+    Renderer,
+    font_of,
+    legend,
+    program_of,
+)
 
 FAULT_EVENTS = (pygame.MOUSEBUTTONDOWN, pygame.MOUSEMOTION, pygame.MOUSEBUTTONUP)
 
@@ -41,14 +55,22 @@ SPARE_WHEN_PAINTED = 0.25
 IDLE_WAIT_MS = 250
 """How long an idle tick waits for an event; any event ends the wait at once."""
 
-HUD_HEIGHT = 48
 HUD_BACK = (38, 40, 46)
 HUD_TEXT = (235, 235, 235)
 HUD_DIM = (150, 155, 165)
+HUD_NOTICE = (255, 206, 84)
+HUD_PAD = 6
+"""Pixels around the bars' text."""
+GAP = "   "
+"""Between the parts of a HUD line; lines wrap here first, then between words."""
+FONT_SHARE = 1 / 50
+"""The HUD's text is this share of the window's height, within `FONT_SIZES`."""
+FONT_SIZES = (11, 20)
 HELP = (
-    "Space pause   . step   + - speed   r restart   e edit   x fault tool   "
-    "g l o overlays   F12 screenshot   q quit"
-)
+    "Space pause", ". step", "+ - speed", "r restart", "e edit", "x fault tool",
+    "g l o overlays", "F12 screenshot", "q quit",
+)  # fmt: skip
+EDIT_HELP = ("h help", "Enter: hand the shape to the swarm", "Ctrl+S save", "q quit")
 OVERLAY_KEYS = {pygame.K_g: "values", pygame.K_l: "links", pygame.K_o: "error"}
 """Keys that toggle `render.OVERLAYS`: a local program's gradient values, communication links
 and localisation error."""
@@ -76,26 +98,29 @@ class Viewer:
         speed: float = 8,
         fps: int = 60,
         screenshots: Path = Path(),
-        observers: Sequence = (),
+        observers: Sequence[Observer] = (),
         max_steps: int | None = None,
     ) -> None:
         pygame.display.init()  # not pygame.init(): no sound, so no audio device needed
-        pygame.font.init()
         pygame.display.set_caption(f"swarmshape - {title}")
         self.screen = pygame.display.set_mode(size, pygame.RESIZABLE)
-        self.font = pygame.font.Font(None, 22)
+        self.font = font_of(self._font_size())
         self.clock = pygame.time.Clock()
         self.title = title
         self.make_swarm = make_swarm
+        self.observers = tuple(observers)
+        """Recorders and traces, handed to each run's `Runner`."""
+        self.max_steps = max_steps
+        """Passed to the `Runner` (None: its default)."""
         self.world = world
-        self.swarm = make_swarm(world) if start else None
+        self.runner: Runner | None = None
+        """The run on show, None until the editor hands over a first shape."""
+        if start:
+            self.start_run(world)
         self.renderer = Renderer(world)
         self.speed_index = min(range(len(SPEEDS)), key=lambda i: abs(SPEEDS[i] - speed))
         self.fps = fps
         self.screenshots = screenshots
-        self.observers = observers
-        """Recorders and traces: each captures the swarm after every step."""
-        self.max_steps = max_steps
         self.paused = False
         self.running = True
         self.notice = ""
@@ -115,36 +140,67 @@ class Viewer:
         self._drag_to: tuple[int, int] | None = None
         self.overlays: set[str] = set()
         """What `render.Renderer.draw` draws over a local program's robots."""
+        self._area: pygame.Rect | None = None
+        """Where the arena was last drawn: clicks land on what the user sees."""
         if not start:
             self.start_editing()
+
+    @property
+    def swarm(self) -> Swarm | None:
+        return None if self.runner is None else self.runner.swarm
+
+    def start_run(self, world: World) -> None:
+        """A new run on `world` (the first, a restart, or the editor's first shape)."""
+        self.runner = Runner(self.make_swarm(world), self.observers, self.max_steps)
 
     @property
     def speed(self) -> float:
         return SPEEDS[self.speed_index]
 
     def run(self) -> None:
-        while self.tick():
-            pass
+        """Until the user quits; then the run's observers write their files, as at the end of
+        a headless run (or drop what they had half-written if the window failed)."""
+        try:
+            while self.tick():
+                pass
+        except BaseException:
+            if self.runner is not None:
+                self.runner.discard()
+            pygame.quit()
+            raise
+        if self.runner is not None:
+            self.runner.close()
         pygame.quit()
 
     @property
     def out_of_steps(self) -> bool:
-        """`max_steps` steps have run in total, as `runs.Runner` counts them."""
-        swarm = self.swarm
-        return (
-            self.max_steps is not None and swarm is not None and swarm.step_count >= self.max_steps
-        )
+        return self.runner is not None and self.runner.out_of_steps
 
     @property
     def idle(self) -> bool:
-        """Nothing changes unless the user acts: no swarm, paused, or formed with every robot
-        at rest and none wandering, or `max_steps` reached."""
-        swarm = self.swarm
-        if swarm is None or self.paused or self.out_of_steps:
-            return True
-        if not swarm.complete or swarm.faults.ahead(swarm.step_count):
-            return False
-        return not (np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any())
+        """Nothing changes unless the user acts (`why_idle` says what holds it)."""
+        return self.why_idle() is not None
+
+    def why_idle(self) -> str | None:
+        """Why the window waits for the user instead of stepping: no swarm yet, paused, out of
+        steps, or the run finished (formed, stranded, or a local program gone quiet, with no
+        fault still to come) with every robot at rest and none wandering; None while it steps."""
+        runner = self.runner
+        if runner is None:
+            return "no swarm yet"
+        if self.paused:
+            return "PAUSED, Space goes on"
+        if runner.out_of_steps:
+            return "stopped at max steps"
+        swarm = runner.swarm
+        moving = np.isin(swarm.state, (MOVING, WANDERING)).any() or swarm.ahead.any()
+        if not runner.finished or moving:
+            return None
+        if swarm.complete:
+            return "formed, nothing moves"
+        if swarm.stranded:
+            return "stranded: no robot can reach the shape"
+        return f"{swarm.plugin.name} has gone quiet, nothing moves"
 
     def tick(self) -> bool:
         """One frame: events, simulation, drawing. Returns False once the user quit.
@@ -172,8 +228,9 @@ class Viewer:
     def handle(self, event: pygame.event.Event) -> None:
         if event.type == pygame.QUIT:
             self.quit()
-        elif event.type == pygame.VIDEORESIZE:
-            self.screen = pygame.display.set_mode(event.size, pygame.RESIZABLE)
+        elif event.type == pygame.VIDEORESIZE:  # SDL has resized the window's surface
+            self.screen = pygame.display.get_surface()  # set_mode would make a new window
+            self.font = font_of(self._font_size())
         elif event.type == pygame.KEYDOWN and event.key == pygame.K_F12:
             self.notice = f"saved {self.screenshot()}"
         elif self.editing:
@@ -235,7 +292,7 @@ class Viewer:
         elif key in (pygame.K_MINUS, pygame.K_KP_MINUS):
             self.speed_index = max(self.speed_index - 1, 0)
         elif key == pygame.K_r and self.swarm is not None:
-            self.swarm = self.make_swarm(self.world)
+            self.start_run(self.world)
             self.notice = f"restarted with seed {self.swarm.seed}"
         elif key == pygame.K_e:
             self.start_editing()
@@ -266,9 +323,7 @@ class Viewer:
             self.notice += f": {program.name} does not localise (Program.estimate)"
 
     def step(self) -> None:
-        self.swarm.step()
-        for observer in self.observers:
-            observer.capture(self.swarm)
+        self.runner.step()
         self._follow_world()
 
     def _follow_world(self) -> None:
@@ -330,7 +385,7 @@ class Viewer:
                 agents = shape.count + ceil(SPARE_WHEN_PAINTED * shape.count)
                 spec = GroupSpec(placed.name, shape, placed.colour, agents, editor.pose)
                 self.world = build_world([spec], editor.canvas.size)
-                self.swarm = self.make_swarm(self.world)
+                self.start_run(self.world)
                 editor.agents, editor.resizable = self.world.agents, False
             else:
                 self.swarm.reshape(group, shape, editor.pose)
@@ -360,15 +415,37 @@ class Viewer:
         print(f"screenshot: {path}")
         return path
 
+    def _font_size(self) -> int:
+        low, high = FONT_SIZES
+        return max(low, min(high, round(self.screen.get_height() * FONT_SHARE)))
+
     def _world_area(self) -> pygame.Rect:
+        """Where the arena is: where it was last drawn, or between the bars as they are now."""
+        return self._area or self._layout()[3]
+
+    def _layout(self) -> tuple[list[tuple[str, tuple]], list[list[Key]], list[str], pygame.Rect]:
+        """The top bar's lines with their colours, the legend's rows and the keys' lines of the
+        bottom bar, and the arena between the bars. The legend is left out of a window so small
+        that it would leave the arena less than half the height."""
+        said = self._said()
+        top = [(line, HUD_TEXT) for line in self._wrap(self.status())]
+        second = HUD_NOTICE if said else HUD_DIM
+        top += [(line, second) for line in self._wrap(said or self._about())]
+        keys = self._key_rows(legend(self.swarm)) if self.swarm and not self.editing else []
+        helps = self._wrap(GAP.join(EDIT_HELP if self.editing else HELP))
+        line = self.font.get_linesize()
         width, height = self.screen.get_size()
-        return pygame.Rect(0, HUD_HEIGHT, width, max(1, height - HUD_HEIGHT))
+        above = len(top) * line + 2 * HUD_PAD
+        below = len(helps) * line + 2 * HUD_PAD
+        if above + below + len(keys) * line > height / 2:
+            keys = []
+        below += len(keys) * line
+        return top, keys, helps, pygame.Rect(0, above, width, max(1, height - above - below))
 
     def draw(self) -> None:
-        area = self._world_area()
+        top, keys, helps, area = self._layout()
+        self._area = area
         self.renderer.draw(self.screen, self.swarm, area, self.overlays)
-        if not self.editing:
-            self._legend(area)
         if self._drag_from is not None and self._drag_to is not None:
             first = self.renderer.cell_rect(self._drag_from, area)
             pygame.draw.rect(
@@ -379,31 +456,82 @@ class Viewer:
             if self.editor.show_help:
                 panel = self._help_panel(area)
                 self.screen.fill(HUD_BACK, panel)
+                step = self.font.get_linesize() + 2
                 for row, line in enumerate(HELP_LINES):
-                    self._text(line, (panel.x + 10, panel.y + 6 + 22 * row), HUD_TEXT)
-        width = self.screen.get_width()
-        self.screen.fill(HUD_BACK, (0, 0, width, HUD_HEIGHT))
-        self._text(self.status(), (10, 6), HUD_TEXT)
-        self._text(self._second_line(), (10, 27), HUD_DIM)
+                    self._text(line, (panel.x + 10, panel.y + 5 + step * row), HUD_TEXT)
+        width, height = self.screen.get_size()
+        line = self.font.get_linesize()
+        self.screen.fill(HUD_BACK, (0, 0, width, area.top))
+        self.screen.fill(HUD_BACK, (0, area.bottom, width, height - area.bottom))
+        for row, (text, colour) in enumerate(top):
+            self._text(text, (HUD_PAD, HUD_PAD + row * line), colour)
+        for row, row_keys in enumerate(keys):
+            self._keys(row_keys, area.bottom + HUD_PAD + row * line)
+        for row, text in enumerate(helps):
+            self._text(text, (HUD_PAD, area.bottom + HUD_PAD + (len(keys) + row) * line), HUD_DIM)
 
-    def _legend(self, area: pygame.Rect) -> None:
-        """The local program's state colours, in the arena's bottom-left corner."""
-        entries = legend(self.swarm)
-        if not entries:
-            return
-        width = max(self.font.size(name)[0] for name, _ in entries) + 38
-        panel = pygame.Rect(0, 0, width, 20 * len(entries) + 8)
-        panel.bottomleft = (area.left + 8, area.bottom - 8)
-        self.screen.fill(HUD_BACK, panel)
-        for row, (name, colour) in enumerate(entries):
-            y = panel.y + 5 + 20 * row
-            self.screen.fill(colour, (panel.x + 8, y + 2, 14, 14))
-            self._text(name, (panel.x + 30, y + 1), HUD_TEXT)
+    def _wrap(self, text: str) -> list[str]:
+        """`text` in lines that fit the window's width, broken between its parts (`GAP`), or
+        between words where one part alone is too wide; at least one line, if an empty one."""
+        room = self.screen.get_width() - 2 * HUD_PAD
+
+        def fits(line: str) -> bool:
+            return self.font.size(line)[0] <= room
+
+        lines = [""]
+        for part in text.split(GAP):
+            words = [part] if fits(part) else part.split(" ")
+            for index, word in enumerate(words):
+                joined = f"{lines[-1]}{' ' if index else GAP}{word}" if lines[-1] else word
+                if fits(joined):
+                    lines[-1] = joined
+                else:
+                    lines.append(word)
+        return lines
+
+    def _swatch(self) -> int:
+        return max(6, round(0.7 * self.font.get_height()))
+
+    def _key_width(self, key: Key) -> int:
+        return len(key.colours) * (self._swatch() + 2) + 3 + self.font.size(key.name)[0]
+
+    def _key_rows(self, keys: list[Key]) -> list[list[Key]]:
+        """The legend's keys in rows that fit the window's width."""
+        room, gap = self.screen.get_width() - 2 * HUD_PAD, self.font.size(GAP)[0]
+        rows: list[list[Key]] = []
+        used = room
+        for key in keys:
+            width = self._key_width(key)
+            if used + gap + width > room:
+                rows.append([])
+                used = -gap
+            rows[-1].append(key)
+            used += gap + width
+        return rows
+
+    def _keys(self, keys: list[Key], y: int) -> None:
+        """One row of the legend: each key's swatches (a square per colour, or a red cross on
+        the floor for removed robots) and its name."""
+        side, x = self._swatch(), HUD_PAD
+        top = y + (self.font.get_linesize() - side) // 2
+        for key in keys:
+            for colour in key.colours:
+                square = pygame.Rect(x, top, side, side)
+                if key.cross:
+                    self.screen.fill(FLOOR, square)
+                    inner = square.inflate(-side // 3, -side // 3)
+                    pygame.draw.line(self.screen, colour, inner.topleft, inner.bottomright, 2)
+                    pygame.draw.line(self.screen, colour, inner.bottomleft, inner.topright, 2)
+                else:
+                    self.screen.fill(colour, square)
+                x += side + 2
+            self._text(key.name, (x + 3, y), HUD_TEXT)
+            x += 3 + self.font.size(key.name)[0] + self.font.size(GAP)[0]
 
     def _help_panel(self, area: pygame.Rect) -> pygame.Rect:
         """The corner of `area` where the help covers the fewest seeds, then painted cells."""
         width = max(self.font.size(line)[0] for line in HELP_LINES) + 20
-        panel = pygame.Rect(0, 0, width, 22 * len(HELP_LINES) + 10)
+        panel = pygame.Rect(0, 0, width, (self.font.get_linesize() + 2) * len(HELP_LINES) + 10)
         inner = area.inflate(-16, -16)
         corners = [
             panel.move_to(bottomright=inner.bottomright),
@@ -424,35 +552,65 @@ class Viewer:
     def _text(self, text: str, where: tuple[int, int], colour: tuple[int, int, int]) -> None:
         self.screen.blit(self.font.render(text, True, colour), where)
 
-    def _second_line(self) -> str:
+    def _said(self) -> str:
+        """What the window has to tell the user now: a notice, or the editor's question or
+        message; empty if nothing."""
         if not self.editing:
-            return self.notice or HELP
-        editor = self.editor
-        return editor.prompt() or editor.message or "h help   Enter: hand the shape to the swarm"
+            return self.notice
+        return self.editor.prompt() or self.editor.message
+
+    def _about(self) -> str:
+        """What is on show, when there is nothing to tell."""
+        if self.editing:
+            under = "; the swarm runs on underneath" if self.swarm is not None else ""
+            return f"left button paints, right button erases{under}"
+        world = self.swarm.world
+        return (
+            f"{self.title}: {self.swarm.plugin.name}, {world.agents:,} robots for "
+            f"{len(world.targets):,} cells"
+        )
+
+    def _second_line(self) -> str:
+        return self._said() or self._about()
 
     def status(self) -> str:
         if self.editing:
             return self.editor.status()
         swarm = self.swarm
         settled = int((swarm.state == SETTLED).sum())
+        parts = [
+            f"step {swarm.step_count:,}/{self.runner.max_steps:,}",
+            f"settled {settled:,}/{len(swarm.filled):,}",
+            f"coverage {100 * swarm.filled.mean():.1f}%",
+            self._pace(),
+            self._rate(),
+            f"seed {swarm.seed}",
+        ]
         done = swarm.completed_at
-        formed = f"   formed at step {max(done)}" if None not in done else ""
-        paused = "   PAUSED" if self.paused else ""
+        if None not in done:
+            parts.append(f"formed at step {max(done):,}")
         missing = len(swarm.filled) - len(swarm.cell)
         if missing > 0:
-            formed += f"   {missing} agents short"
-        limit = "" if self.max_steps is None else f"/{self.max_steps}"
-        if self.out_of_steps:
-            formed += "   max steps reached"
+            parts.append(f"{missing:,} robots short")
         if swarm.faults.lost:
-            formed += f"   lost {swarm.faults.lost}"
+            parts.append(f"lost {swarm.faults.lost:,}")
         if self.fault_tool:
-            formed += "   FAULT TOOL"
+            parts.append("FAULT TOOL")
         if self.overlays and program_of(swarm) is not None:
-            formed += "   showing " + " ".join(sorted(self.overlays))
-        return (
-            f"step {swarm.step_count}{limit}   settled {settled}/{len(swarm.filled)}   "
-            f"coverage {100 * swarm.filled.mean():.1f}%   {self.speed:g} steps/frame   "
-            f"{'idle' if self.idle else f'{self.clock.get_fps():.0f} FPS'}   "
-            f"seed {swarm.seed}{formed}{paused}"
-        )
+            parts.append("showing " + " ".join(sorted(self.overlays)))
+        return GAP.join(parts)
+
+    def _pace(self) -> str:
+        """Steps per frame, in words that read right for one step and for fractions."""
+        speed = self.speed
+        if speed >= 1:
+            return f"{speed:g} step{'' if speed == 1 else 's'}/frame"
+        return f"1 step/{1 / speed:g} frames"
+
+    def _rate(self) -> str:
+        """Frames per second while the run goes on; once the window waits, why it does."""
+        why = self.why_idle()
+        if why is not None:
+            return f"idle: {why}"
+        fps = self.clock.get_fps()
+        return f"{fps:.0f} FPS" if fps >= 1 else "measuring FPS"
