@@ -21,7 +21,7 @@ from swarmshape.ui.render import (
     TEXT_DARK,
     Renderer,
     legend,
-    program_of,
+    shown_of,
 )
 from tests.conftest import grid_from, make_swarm
 
@@ -104,7 +104,7 @@ def drawn(swarm: Swarm, overlays=()) -> tuple[pygame.Surface, Renderer]:
 def test_a_local_program_with_states_colours_its_robots_by_state():
     swarm = local_swarm()
     surface, renderer = drawn(swarm)
-    assert program_of(swarm).name == "shown" and program_of(make_swarm(SHAPE)) is None
+    assert shown_of(swarm).plugin == "shown" and shown_of(make_swarm(SHAPE)) is None
     names = [key.name for key in legend(swarm)]
     assert names == ["first", "second", "third", "stalled", "removed", "seed", "empty cell"]
     for robot in range(3):
@@ -166,5 +166,5 @@ def test_every_colour_on_the_arena_has_a_key_in_the_legend(strategy):
         pixel = (np.floor(centre * size) + origin).astype(int)
         assert surface.get_at(pixel.tolist())[:3] in swatches, (strategy, centre)
     assert {"stalled", "removed", "seed", "empty cell"} <= {key.name for key in keys}
-    if not program_of(swarm) or not program_of(swarm).states:
+    if not shown_of(swarm) or not shown_of(swarm).states:
         assert [key.name for key in keys][:4] == ["waiting", "moving", "settled", "wandering"]

@@ -34,6 +34,7 @@ from swarmshape.core.perception import (
 from swarmshape.core.plugin import Plugin
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import STALLED
+from swarmshape.core.swarm import Shown
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
@@ -192,19 +193,39 @@ class LocalControl:
     def figures(self) -> dict[str, Any]:
         """Messages lost, and how far robots' own position estimates are off (cells)."""
         figures: dict[str, Any] = {"messages_lost": self.lost}
-        estimate = self.program.estimate(self.memory)
-        if estimate is not None and (estimate[0] & self.swarm.present).any():
-            localised, frame = estimate
-            localised = localised & self.swarm.present
-            truth = np.zeros_like(self.swarm.cell)
-            for group, g in enumerate(self.swarm.world.groups):
-                mine = self.swarm.group == group
-                truth[mine] = g.pose.to_frame(self.swarm.cell[mine])
-            error = np.hypot(*(frame[localised] - truth[localised]).T)
+        believes = self._believes()
+        if believes is not None and believes[0].any():
+            localised, cells = believes
+            error = np.hypot(*(cells[localised] - self.swarm.cell[localised]).T)
             figures["localisation_error_mean"] = round(float(error.mean()), 4)
             figures["localisation_error_max"] = round(float(error.max()), 4)
             figures["localised"] = int(localised.sum())
         return figures
+
+    def shown(self) -> Shown:
+        program, memory = self.program, self.memory
+        return Shown(
+            plugin=program.name,
+            states=program.states,
+            state=np.asarray(memory.state, dtype=np.int64) if program.states else None,
+            values_of=program.shown,
+            values=None if program.shown is None else np.asarray(getattr(memory, program.shown)),
+            links=self.links,
+            believes=self._believes(),
+        )
+
+    def _believes(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Which present robots know where they are, and the world cell each believes it is on
+        (None: the program does not localise)."""
+        estimate = self.program.estimate(self.memory)
+        if estimate is None:
+            return None
+        localised, frame = estimate
+        cells = np.zeros_like(self.swarm.cell)
+        for group, g in enumerate(self.swarm.world.groups):
+            mine = self.swarm.group == group
+            cells[mine] = g.pose.to_world(np.asarray(frame)[mine])
+        return np.asarray(localised, dtype=bool) & self.swarm.present, cells
 
     def index_world(self) -> None:
         world = self.swarm.world

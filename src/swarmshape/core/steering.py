@@ -216,6 +216,10 @@ class Steering:
         """Nothing beyond the messages every run reports."""
         return {}
 
+    def shown(self) -> None:
+        """A central plan has nothing to show beyond where robots are going."""
+        return None
+
     def snapshot(self) -> dict[str, Any]:
         values = {
             "target": self.target,

@@ -64,6 +64,24 @@ class Params:
         spec_of(Params, "speed_variation").check(self.speed_variation)
 
 
+@dataclass(frozen=True, eq=False)
+class Shown:
+    """What a driver can show of its robots besides where they are, for the viewer: it colours
+    robots by `state` when `states` names them, prints the `values` (named `values_of`) on
+    them, draws the radio `links` heard in the last step and a line from each robot that
+    `believes` it knows where it is to the world cell it believes it is on."""
+
+    plugin: str
+    states: tuple[str, ...] = ()
+    state: np.ndarray | None = None
+    values_of: str | None = None
+    values: np.ndarray | None = None
+    links: tuple[np.ndarray, np.ndarray] | None = None
+    """Pairs ``(robot, other)`` that heard each other (other ``>= n``: a seed)."""
+    believes: tuple[np.ndarray, np.ndarray] | None = None
+    """Which robots know where they are, and the world cell each believes it is on."""
+
+
 class Driver(Protocol):
     """What a swarm asks of its driver, phase by phase; each plug-in kind brings its own."""
 
@@ -105,6 +123,9 @@ class Driver(Protocol):
 
     def figures(self) -> dict[str, Any]:
         """What this kind of plug-in adds to a run's metrics."""
+
+    def shown(self) -> Shown | None:
+        """What the viewer may draw of the robots beyond their cells (None: nothing)."""
 
     def snapshot(self) -> dict[str, Any]:
         """The driver's state, as plain values."""

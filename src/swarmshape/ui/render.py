@@ -5,11 +5,11 @@ targets, green squares the seeds; agents take their group's colour, brightest wh
 slightly darker once settled, pale while waiting or wandering; stalled robots are charcoal, and
 where a fault removed robots a red cross shows for `LOST_MARK_STEPS` steps.
 
-A local program that names its `states` has its robots coloured by ``memory.state`` instead,
-from `PALETTE`; `legend` says what every colour on the arena means, for any plug-in.
-Overlays, each optional, go on top: ``"values"`` prints the program's `shown` memory slot on
-each robot, ``"links"`` draws a line for every message heard in the last step, ``"error"`` a
-red line from each localised robot to where it believes it is.
+A driver that names its robots' states (`Driver.shown`: a local program's ``memory.state``) has
+them coloured by state instead, from `PALETTE`; `legend` says what every colour on the arena
+means, for any plug-in. Overlays, each optional, go on top: ``"values"`` prints the values the
+driver shows on each robot, ``"links"`` draws a line for every message heard in the last step,
+``"error"`` a red line from each localised robot to where it believes it is.
 """
 
 from __future__ import annotations
@@ -22,9 +22,8 @@ from typing import NamedTuple
 import numpy as np
 import pygame
 
-from swarmshape.core.local import LocalControl, Program
 from swarmshape.core.states import STALLED
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Shown, Swarm
 from swarmshape.core.world import World
 
 FLOOR = (250, 250, 247)
@@ -143,28 +142,28 @@ class Renderer:
             if start < stop:  # one blit call per colour draws all its squares
                 square = self._square(cell - 2 * gap, colour)
                 surface.fblits(zip(repeat(square), corners[start:stop]))
-        program = program_of(swarm)
-        if program is None or not overlays:
+        shown = swarm.driver.shown()
+        if shown is None or not overlays:
             return
-        if "links" in overlays:
-            self._links(surface, swarm, cell, origin, world_rect)
-        if "error" in overlays:
-            self._errors(surface, swarm, program, cell, origin)
-        if "values" in overlays and program.shown is not None and cell >= VALUE_MIN_CELL:
-            self._values(surface, swarm, program, cell, origin, colours, kind)
+        if "links" in overlays and shown.links is not None:
+            self._links(surface, swarm, shown.links, cell, origin, world_rect)
+        if "error" in overlays and shown.believes is not None:
+            self._errors(surface, swarm, shown.believes, cell, origin)
+        if "values" in overlays and shown.values is not None and cell >= VALUE_MIN_CELL:
+            self._values(surface, swarm, shown.values, cell, origin, colours, kind)
 
     def _links(
         self,
         surface: pygame.Surface,
         swarm: Swarm,
+        links: tuple[np.ndarray, np.ndarray],
         cell: int,
         origin: tuple[int, int],
         world_rect: pygame.Rect,
     ) -> None:
         """A thin line per pair of robots (or robot and seed) that heard each other in the last
         step, drawn once per pair on one translucent layer."""
-        links = swarm.driver.links
-        if links is None or not len(links[0]):
+        if not len(links[0]):
             return
         owner, other = links
         n = len(swarm.cell)
@@ -185,22 +184,15 @@ class Renderer:
         self,
         surface: pygame.Surface,
         swarm: Swarm,
-        program: Program,
+        believes: tuple[np.ndarray, np.ndarray],
         cell: int,
         origin: tuple[int, int],
     ) -> None:
         """A red line from each localised robot's centre to the centre of the cell it believes
         it is on, ending in a dot there; none where that is its cell, as the metrics count it
         (a robot under way still counts the cell it left)."""
-        estimate = program.estimate(swarm.driver.memory)
-        if estimate is None:
-            return
-        localised, frame_cells = estimate
-        robots = np.flatnonzero(np.asarray(localised, dtype=bool) & swarm.present)
-        believed = np.zeros((len(robots), 2), dtype=np.int64)
-        for group, g in enumerate(swarm.world.groups):
-            mine = swarm.group[robots] == group
-            believed[mine] = g.pose.to_world(np.asarray(frame_cells)[robots[mine]])
+        robots = np.flatnonzero(believes[0])
+        believed = believes[1][robots]
         off = (believed != swarm.cell[robots]).any(axis=1)
         truth, believed = swarm.positions()[robots], believed + 0.5
         at = np.array(origin)
@@ -215,14 +207,13 @@ class Renderer:
         self,
         surface: pygame.Surface,
         swarm: Swarm,
-        program: Program,
+        values: np.ndarray,
         cell: int,
         origin: tuple[int, int],
         colours: list[tuple[int, int, int]],
         kind: np.ndarray,
     ) -> None:
-        """The `shown` slot's value on each present robot, dark or light to suit its colour."""
-        values = np.asarray(getattr(swarm.driver.memory, program.shown))
+        """The driver's shown value on each present robot, dark or light to suit its colour."""
         here = np.flatnonzero(swarm.present)
         values = values[here]
         known = (values >= 0) & (values < UNKNOWN)
@@ -289,25 +280,23 @@ class Renderer:
         return self._squares[key]
 
 
-def program_of(swarm: Swarm | None) -> Program | None:
-    """The local program driving `swarm`, or None (a central strategy, or no swarm)."""
-    driver = None if swarm is None else swarm.driver
-    return driver.program if isinstance(driver, LocalControl) else None
+def shown_of(swarm: Swarm | None) -> Shown | None:
+    """What the driver of `swarm` shows beyond where robots are (None: nothing, or no swarm)."""
+    return None if swarm is None else swarm.driver.shown()
 
 
-def _program_states(swarm: Swarm | None) -> list[tuple[str, tuple[int, int, int]]]:
-    """The program's state names and their colours, when robots are coloured by state."""
-    program = program_of(swarm)
-    if program is None or not program.states:
+def _named_states(shown: Shown | None) -> list[tuple[str, tuple[int, int, int]]]:
+    """The driver's state names and their colours, when robots are coloured by state."""
+    if shown is None or shown.state is None:
         return []
-    return [(name, PALETTE[i % len(PALETTE)]) for i, name in enumerate(program.states)]
+    return [(name, PALETTE[i % len(PALETTE)]) for i, name in enumerate(shown.states)]
 
 
 def legend(swarm: Swarm) -> list[Key]:
     """What every colour on the arena means: a local program's named states, or else what
     robots are doing, in each group's shade (central strategies, and programs that name no
     states); then stalled and removed robots, seeds and empty target cells."""
-    named = _program_states(swarm)
+    named = _named_states(shown_of(swarm))
     if named:
         keys = [Key(name, (colour,)) for name, colour in named]
     else:
@@ -329,10 +318,11 @@ def _colours(swarm: Swarm) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
     """Each robot's colour index and the colours: by a local program's ``memory.state`` when it
     names its `states`, else its group's colour shaded by what it is doing (stalled robots are
     charcoal either way)."""
-    named = _program_states(swarm)
-    if named:
+    shown = shown_of(swarm)
+    named = _named_states(shown)
+    if shown is not None and shown.state is not None:
         colours = [colour for _, colour in named] + [STALLED_GREY]
-        kind = np.asarray(swarm.driver.memory.state, dtype=np.int64) % len(named)
+        kind = shown.state % len(named)
         return np.where(swarm.state == STALLED, len(named), kind), colours
     colours = [shade(g.colour) for g in swarm.world.groups for shade in SHADES]
     return swarm.group * len(SHADES) + swarm.state, colours

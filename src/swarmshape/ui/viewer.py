@@ -41,7 +41,7 @@ from swarmshape.ui.render import (
     Renderer,
     font_of,
     legend,
-    program_of,
+    shown_of,
 )
 
 FAULT_EVENTS = (pygame.MOUSEBUTTONDOWN, pygame.MOUSEMOTION, pygame.MOUSEBUTTONUP)
@@ -305,8 +305,8 @@ class Viewer:
 
     def toggle_overlay(self, name: str) -> None:
         """Switch one overlay on or off and say so, or say why it would show nothing."""
-        program = program_of(self.swarm)
-        if program is None:
+        shown = shown_of(self.swarm)
+        if shown is None:
             self.notice = "no local program: overlays show a local program's values and links"
             return
         if name in self.overlays:
@@ -315,12 +315,12 @@ class Viewer:
             return
         self.overlays.add(name)
         self.notice = f"{name} overlay on"
-        if name == "values" and program.shown is None:
-            self.notice += f": {program.name} shows no memory slot (Program.shown)"
+        if name == "values" and shown.values is None:
+            self.notice += f": {shown.plugin} shows no memory slot (Program.shown)"
         elif name == "values" and self.renderer.fit(self._world_area())[0] < VALUE_MIN_CELL:
             self.notice += ": cells too small to read, enlarge the window"
-        elif name == "error" and program.estimate(self.swarm.driver.memory) is None:
-            self.notice += f": {program.name} does not localise (Program.estimate)"
+        elif name == "error" and shown.believes is None:
+            self.notice += f": {shown.plugin} does not localise (Program.estimate)"
 
     def step(self) -> None:
         self.runner.step()
@@ -596,7 +596,7 @@ class Viewer:
             parts.append(f"lost {swarm.faults.lost:,}")
         if self.fault_tool:
             parts.append("FAULT TOOL")
-        if self.overlays and program_of(swarm) is not None:
+        if self.overlays and shown_of(swarm) is not None:
             parts.append("showing " + " ".join(sorted(self.overlays)))
         return GAP.join(parts)
 
