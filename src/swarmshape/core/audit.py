@@ -7,6 +7,7 @@ one cell shows up as a counted overlap, not as a silent picture glitch.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from swarmshape.core.motion import STEPS, TOUCH
@@ -48,7 +49,10 @@ def new_scratch(size: tuple[int, int]) -> np.ndarray:
 
 
 @njit(cache=True)
-def _shared_cell_pairs(cell, direction, offset, present, seeds, stride, first):  # pragma: no cover
+def _shared_cell_pairs(
+    cell: np.ndarray, direction: np.ndarray, offset: np.ndarray, present: np.ndarray,
+    seeds: np.ndarray, stride: int, first: np.ndarray,
+) -> npt.NDArray[np.int64]:  # pragma: no cover (compiled)  # fmt: skip
     """Pairs ``(k, 2)`` of overlapping squares: every square goes into the list of each cell it
     covers (`first` holds a list's latest entry per cell, -1 for none) and is tested against
     the squares already there. Squares in order: robots, then seeds."""
@@ -58,7 +62,7 @@ def _shared_cell_pairs(cell, direction, offset, present, seeds, stride, first): 
     owner = np.empty(2 * n + m, dtype=np.int64)
     after = np.empty(2 * n + m, dtype=np.int64)
     centre = np.empty((n + m, 2))
-    found = []
+    found: list[tuple[int, int]] = []
     entries = 0
     for square in range(n + m):
         if square < n:

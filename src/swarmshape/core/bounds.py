@@ -17,9 +17,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy import ndimage
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import (
@@ -160,7 +162,7 @@ def _hall_bound(starts: np.ndarray, targets: np.ndarray) -> int:
         return lower
     depth = frame.at(ndimage.distance_transform_cdt(frame.mask(targets), metric="taxicab"), targets)
     u_r, u_t = _rotated(starts), _rotated(targets)
-    families = [
+    families: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = [
         (u_t, depth, u_r, 0),
         (u_t, remoteness, u_r, 0),
         (u_t, -_l1(targets - hardest), u_r, 0),
@@ -168,7 +170,7 @@ def _hall_bound(starts: np.ndarray, targets: np.ndarray) -> int:
         (u_r, _l1(starts - centre), u_t, slack),
     ]
     for family in families:
-        lower = _first_true(lambda d, f=family: _hall_holds(*f, d), lower, frame.diameter)
+        lower = _first_true(partial(_hall_holds, *family), lower, frame.diameter)
     return lower
 
 
@@ -557,18 +559,18 @@ def _deficient_set(adjacency: np.ndarray, *, from_targets: bool) -> tuple[np.nda
     root = robots + targets
     if from_targets:  # free target -> any robot -> the target it is matched to
         free = robots + np.flatnonzero(owner < 0)
-        tail = [edge_target, matched, np.full(len(free), root)]
-        head = [edge_robot, robots + match[matched], free]
+        tails = [edge_target, matched, np.full(len(free), root)]
+        heads = [edge_robot, robots + match[matched], free]
     else:  # free robot -> any target -> the robot matched to it
         free = np.flatnonzero(match < 0)
         owned = np.flatnonzero(owner >= 0)
-        tail = [edge_robot, robots + owned, np.full(len(free), root)]
-        head = [edge_target, owner[owned], free]
+        tails = [edge_robot, robots + owned, np.full(len(free), root)]
+        heads = [edge_target, owner[owned], free]
     side, order = (slice(robots, root), cols) if from_targets else (slice(0, robots), rows)
     chosen = np.zeros(len(order), bool)
     if len(free) == 0:
         return chosen, 0
-    tail, head = np.concatenate(tail), np.concatenate(head)
+    tail, head = np.concatenate(tails), np.concatenate(heads)
     arcs = csr_matrix((np.ones(len(tail), np.int8), (tail, head)), shape=(root + 1, root + 1))
     reached = np.zeros(root + 1, bool)
     reached[breadth_first_order(arcs, root, directed=True, return_predecessors=False)] = True
@@ -724,8 +726,9 @@ class _TimeExpansion:
         on_target = np.zeros(self.size, bool)
         on_target[self.targets] = True
         ends = np.flatnonzero(last >= 0)
-        tails = [2 * node[alive], np.full(n, source)]  # inside each node: capacity 1
-        heads = [2 * node[alive] + 1, 2 * node[0, self.starts]]
+        # inside each node: capacity 1
+        tails: list[npt.ArrayLike] = [2 * node[alive], np.full(n, source)]
+        heads: list[npt.ArrayLike] = [2 * node[alive] + 1, 2 * node[0, self.starts]]
         move_from, move_to = node[:-1, self.tail], node[1:, self.head]
         moves = (move_from >= 0) & (move_to >= 0)
         tails += [2 * move_from[moves] + 1, 2 * last[ends] + 1, [at_target, elsewhere]]

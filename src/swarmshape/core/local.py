@@ -99,6 +99,10 @@ class Memory:
             shape = (robots,) if slot.width is None else (robots, slot.width)
             setattr(self, name, np.full(shape, slot.fill, dtype=slot.dtype))
 
+    if TYPE_CHECKING:  # the slots a program declared, set in __init__ and `restore`
+
+        def __getattr__(self, name: str) -> np.ndarray: ...
+
     def __len__(self) -> int:
         return self.robots
 

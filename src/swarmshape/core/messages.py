@@ -47,7 +47,7 @@ class MessageQueue:
         """Sent and not yet delivered."""
         return list(self._pending)
 
-    def retarget(self, new_index: Sequence[int]) -> None:
+    def retarget(self, new_index: Sequence[int] | np.ndarray) -> None:
         """Renumber pending messages' targets after the shape changed; drop those whose
         target is gone (``new_index[target] < 0``). The log keeps what was said."""
         kept = [replace(m, target=int(new_index[m.target])) for m in self._pending]

@@ -158,20 +158,21 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
     }
 
 
-def _totals_against_bounds(groups: list[dict[str, Any]], steps: list[int | None]) -> dict:
+def _totals_against_bounds(groups: list[dict[str, Any]], steps: list[int | None]) -> dict[str, Any]:
     """Groups move in parallel: the run's makespan bound is the largest, distances add up.
     Exact only when every group's is (a loose bound in one group might hide a larger
     optimum); the method lists every group's."""
     makespan = max(g["makespan_lower_bound"] for g in groups)
     total = sum(g["distance_lower_bound"] for g in groups)
     moved = sum(g["total_distance"] for g in groups)
+    finished = [s for s in steps if s is not None]
     return {
         "makespan_lower_bound": makespan,
         "makespan_bound_cells": max(g["makespan_bound_cells"] for g in groups),
         **_combined(groups, "makespan"),
         "distance_lower_bound": total,
         **_combined(groups, "distance"),
-        "makespan_ratio": _ratio(None if None in steps else max(steps), makespan),
+        "makespan_ratio": _ratio(max(finished) if len(finished) == len(steps) else None, makespan),
         "distance_ratio": _ratio(moved, total),
     }
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from swarmshape.core.lattice import FREE
@@ -94,7 +95,9 @@ def step_sizes(
 
 
 @njit(cache=True)
-def _step_sizes(speed, room, pace, top, a):  # pragma: no cover (compiled)
+def _step_sizes(
+    speed: np.ndarray, room: np.ndarray, pace: np.ndarray, top: float, a: float
+) -> npt.NDArray[np.float64]:  # pragma: no cover (compiled)
     out = np.empty(len(speed))
     for i in range(len(speed)):
         out[i] = _step_size(speed[i], room[i], top * pace[i], a)
@@ -102,19 +105,20 @@ def _step_sizes(speed, room, pace, top, a):  # pragma: no cover (compiled)
 
 
 @njit(cache=True)
-def _step_size(speed, room, top, a):  # pragma: no cover (compiled)
+def _step_size(speed: float, room: float, top: float, a: float) -> float:  # pragma: no cover
     """One robot's step (see `step_sizes`)."""
     # the largest v whose braking run v + (v - a) + (v - 2a) + ... still fits in `room`
-    whole = np.floor((np.sqrt(1.0 + 8.0 * room / a) - 1.0) / 2.0)
+    whole: float = np.floor((np.sqrt(1.0 + 8.0 * room / a) - 1.0) / 2.0)
     stop_cap = (room + a * whole * (whole + 1.0) / 2.0) / (whole + 1.0)
     return min(top, speed + a, stop_cap, room)
 
 
 @njit(cache=True)
 def move(
-    cell, direction, ahead, offset, speed, distance, pace, leader, holder, queued, stride,
-    top, a, passes,
-):  # pragma: no cover (compiled)  # fmt: skip
+    cell: np.ndarray, direction: np.ndarray, ahead: np.ndarray, offset: np.ndarray,
+    speed: np.ndarray, distance: np.ndarray, pace: np.ndarray, leader: np.ndarray,
+    holder: np.ndarray, queued: np.ndarray, stride: int, top: float, a: float, passes: int,
+) -> None:  # pragma: no cover (compiled)  # fmt: skip
     """Advance every robot along its reserved run (its arrays, updated in place); a robot
     reaching the next centre gives up the cell behind it (`holder` and `queued` by flat key) to
     the robot queued for it if there is one. Followers stay behind their leaders (`follow`)."""
@@ -147,8 +151,10 @@ def move(
 
 @njit(cache=True)
 def follow(
-    cell, direction, offset, speed, pace, leader, room, step, top, a, passes
-):  # pragma: no cover (compiled)
+    cell: np.ndarray, direction: np.ndarray, offset: np.ndarray, speed: np.ndarray,
+    pace: np.ndarray, leader: np.ndarray, room: np.ndarray, step: np.ndarray, top: float,
+    a: float, passes: int,
+) -> None:  # pragma: no cover (compiled)  # fmt: skip
     """Cap followers' steps so that each stays a whole cell behind its leader.
 
     A follower may go as far as its leader's trailing edge after the leader's own step, and
@@ -191,7 +197,9 @@ def follow(
         active = chosen[:going].copy()
 
 
-def positions(cell: np.ndarray, direction: np.ndarray, offset: np.ndarray) -> np.ndarray:
+def positions(
+    cell: npt.NDArray[np.int64], direction: npt.NDArray[np.int64], offset: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]:
     """Square centres in world units: cell centre plus progress toward the next cell."""
     return cell + 0.5 + offset[:, None] * STEPS[direction]
 
@@ -203,7 +211,9 @@ def resolve_claims(keys: np.ndarray, rng: np.random.Generator, scratch: np.ndarr
 
 
 @njit(cache=True)
-def _first_claims(keys, shuffled, scratch):  # pragma: no cover (compiled)
+def _first_claims(
+    keys: np.ndarray, shuffled: np.ndarray, scratch: np.ndarray
+) -> npt.NDArray[np.bool_]:  # pragma: no cover (compiled)
     """The first claim on each key in `shuffled` order wins."""
     wins = np.zeros(len(keys), dtype=np.bool_)
     for claim in shuffled:
@@ -222,4 +232,4 @@ def rows(array: np.ndarray, index: np.ndarray) -> np.ndarray:
 
 
 def inside(cells: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    return (cells >= 0).all(axis=1) & (cells < np.array(size)).all(axis=1)
+    return np.all(cells >= 0, axis=1) & np.all(cells < np.array(size), axis=1)

@@ -47,7 +47,9 @@ class CrossingCounter:
         low, high = np.minimum(ya, yb), np.maximum(ya, yb)
         return self._along_y[x, high + 1] - self._along_y[x, low]
 
-    def x_first_crosses_less(self, origin: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    def x_first_crosses_less(
+        self, origin: np.ndarray, goal: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """True where going along x first crosses fewer shape cells than y first."""
         (x0, y0), (x1, y1) = origin.T, goal.T
         x_first = self._row(y0, x0, x1) + self._column(x1, y0, y1)

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from swarmshape.core.options import checked, option
@@ -187,7 +188,12 @@ def neighbours(
 
 
 @njit(cache=True)
-def _neighbours(cell, seeds, width, height, reach, here):  # pragma: no cover (compiled)
+def _neighbours(
+    cell: np.ndarray, seeds: np.ndarray, width: int, height: int, reach: np.ndarray,
+    here: np.ndarray,
+) -> tuple[
+    npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]
+]:  # pragma: no cover (compiled)  # fmt: skip
     """`neighbours` on a padded grid of who is where, counted and then filled robot by robot."""
     n = len(cell)
     r = 0

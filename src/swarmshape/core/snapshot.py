@@ -172,7 +172,7 @@ def decode_attributes(saved: Snapshot, fresh: Mapping[str, Any]) -> dict[str, An
     return restored
 
 
-def _decode_list(saved: Snapshot, name: str) -> list:
+def _decode_list(saved: Snapshot, name: str) -> list[Any]:
     got = saved.value(name)
     if isinstance(got, dict):
         arrays = got.get("arrays")

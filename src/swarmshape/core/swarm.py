@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 from scipy import ndimage
 
@@ -270,9 +271,9 @@ class Swarm:
 
     def _restore_arrays(self, saved: Snapshot) -> None:
         n, width, height = self.world.agents, *self.world.size
-        inside = {"low": 0, "high": max(width, height) - 1}
-        self.cell = saved.array("cell", np.int64, (n, 2), **inside)
-        self.start_cell = saved.array("start_cell", np.int64, (n, 2), **inside)
+        low, high = 0, max(width, height) - 1
+        self.cell = saved.array("cell", np.int64, (n, 2), low, high)
+        self.start_cell = saved.array("start_cell", np.int64, (n, 2), low, high)
         self.direction = saved.array("direction", np.int64, (n,), 0, len(STEPS) - 1)
         self.ahead = saved.array("ahead", np.int64, (n,), 0, 2)
         self.offset = saved.array("offset", np.float64, (n,), 0, 1)
@@ -701,8 +702,9 @@ class Swarm:
 
 @njit(cache=True)
 def _followable(
-    keys, directions, holder, queued, ahead, direction, cell, stride
-):  # pragma: no cover (compiled)
+    keys: np.ndarray, directions: np.ndarray, holder: np.ndarray, queued: np.ndarray,
+    ahead: np.ndarray, direction: np.ndarray, cell: np.ndarray, stride: int,
+) -> npt.NDArray[np.bool_]:  # pragma: no cover (compiled)  # fmt: skip
     """`Swarm.followable` over the lattice's flat arrays."""
     out = np.zeros(len(keys), dtype=np.bool_)
     for i in range(len(keys)):

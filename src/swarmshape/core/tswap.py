@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from swarmshape.core.motion import rows
@@ -33,7 +34,9 @@ def ring_members(waiting: np.ndarray, waited_for: np.ndarray, robots: int) -> np
 
 
 @njit(cache=True)
-def _on_rings(waiting, waited_for, robots):  # pragma: no cover (compiled)
+def _on_rings(
+    waiting: np.ndarray, waited_for: np.ndarray, robots: int
+) -> npt.NDArray[np.intp]:  # pragma: no cover (compiled)
     next_of = np.full(robots, -1)
     for k in range(len(waiting)):
         next_of[waiting[k]] = waited_for[k]

@@ -145,12 +145,14 @@ class World:
         for index in range(saved.integer("groups", 1, 1000)):
             part = saved.part(f"group{index}")
             grid = part.array("grid", bool, (None, None))
-            shape = Shape(grid, part.number("scale", 0, 1), tuple(part.integers("origin", 2)))
+            origin = part.integers("origin", 2)
+            shape = Shape(grid, part.number("scale", 0, 1), (origin[0], origin[1]))
             x, y, rotation = part.integers("pose", 3)
             if rotation % 90:
                 raise part.error("pose", "turns by other than quarter turns")
             agents = part.integer("agents", 0, MAX_AGENTS)
-            colour = tuple(part.integers("colour", 3, 0, 255))
+            red, green, blue = part.integers("colour", 3, 0, 255)
+            colour = (red, green, blue)
             groups.append(
                 Group.placed(part.text("name"), colour, shape, Pose(x, y, rotation), agents)
             )
