@@ -684,8 +684,8 @@ class Swarm:
         filled, dead = self.filled[mine], self.dead[mine]
         if (filled | dead).all():
             return bool(filled.any()) or not dead.any()
-        if self.params.on_loss != "keep" or not filled.any():
-            return False
+        if self.params.on_loss != "keep" or not self.faults.log or not filled.any():
+            return False  # only a fault (each one logged) leaves a group short of robots
         return int(filled.sum()) == int((self._mobile() & (self.group == group)).sum())
 
     def _find_dead(self) -> np.ndarray:
