@@ -3,12 +3,16 @@
 For each strategy the disc is formed (with one robot per cell, and with a quarter more as
 spares); then 20 % of the robots that form it are removed, at random or as one block (a band
 across one side holding a fifth of the cells), and the run goes on until every reachable cell is
-filled again. Separately, the disc is formed from scratch under a steady failure rate. Writes
-``docs/faults.json``, ``docs/fault-coverage.png`` (coverage through a fault; needs the plot
-extra) and ``docs/faults-healing.png`` (a disc healing, drawn offscreen).
+filled again, or, too few robots left to fill them, until every survivor rests on the shape
+(``--on-loss keep``, the default: the disc keeps its size) or the disc is re-formed smaller and
+filled (``--on-loss rescale``). Separately, the disc is formed from scratch under a steady
+failure rate. Writes ``docs/faults-keep.json`` (or ``docs/faults-rescale.json``),
+``docs/fault-coverage.png`` (coverage through a fault; needs the plot extra) and
+``docs/faults-healing.png`` (a disc healing, drawn offscreen); the pictures heal with spares,
+which never leave the disc short of robots, so the mode changes nothing in them.
 
     .venv/bin/python scripts/faults.py [--strategies optimal greedy random paper] [--cells 1000]
-        [--out docs/faults.json] [--no-pictures | --pictures-only]
+        [--on-loss keep|rescale] [--out docs/faults-keep.json] [--no-pictures | --pictures-only]
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ from swarmshape.core.faults import Faults
 from swarmshape.core.metrics import coverage, run_metrics
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import SETTLED
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.strategies import create
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -45,9 +49,12 @@ many steps, so it gets a rate ~100 times lower (and the concurrent rate is repor
 too when asked with --paper-at-concurrent-rate)."""
 
 
-def form(strategy: str, cells: int, spares: bool, rate: float = 0.0) -> Swarm:
+def form(
+    strategy: str, cells: int, spares: bool, rate: float = 0.0, on_loss: str = "keep"
+) -> Swarm:
     agents = cells + (round(SPARES * cells) if spares else 0)
-    swarm = Swarm(world_of(disc(cells), agents), create(strategy), SEED, faults=Faults((), rate))
+    world, params = world_of(disc(cells), agents), Params(on_loss=on_loss)
+    swarm = Swarm(world, create(strategy), SEED, params, faults=Faults((), rate))
     while not swarm.complete and swarm.step_count < LIMIT[strategy]:
         swarm.step()
     return swarm
@@ -90,12 +97,13 @@ def heal(swarm: Swarm, strategy: str, kind: str) -> tuple[dict, list[float]]:
         "final_coverage": metrics["coverage"],
         "final_scale": metrics["scale"],
         "targets_after": metrics["targets"],
+        "cells_left_open": metrics["cells_left_open"],
         "overlaps": metrics["overlaps"],
     }, curve
 
 
-def under_rate(strategy: str, cells: int, spares: bool, rate: float) -> dict:
-    swarm = form(strategy, cells, spares, rate)
+def under_rate(strategy: str, cells: int, spares: bool, rate: float, on_loss: str) -> dict:
+    swarm = form(strategy, cells, spares, rate, on_loss)
     metrics = run_metrics(swarm)
     recovered = [f["recovery_steps"] for f in metrics["faults"]]
     return {
@@ -106,6 +114,7 @@ def under_rate(strategy: str, cells: int, spares: bool, rate: float) -> dict:
         "final_coverage": metrics["coverage"],
         "final_scale": metrics["scale"],
         "targets_after": metrics["targets"],
+        "cells_left_open": metrics["cells_left_open"],
         "overlaps": metrics["overlaps"],
         "failure_events": len(recovered),
         "unrecovered_events": recovered.count(None),
@@ -176,7 +185,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--strategies", nargs="+", default=["optimal", "greedy", "random", "paper"])
     parser.add_argument("--cells", type=int, default=1000)
-    parser.add_argument("--out", type=Path, default=DOCS / "faults.json")
+    parser.add_argument("--on-loss", choices=("keep", "rescale"), default="keep")
+    parser.add_argument("--out", type=Path, help="default docs/faults-ON_LOSS.json")
     parser.add_argument("--no-pictures", action="store_true")
     parser.add_argument(
         "--pictures-only",
@@ -187,13 +197,15 @@ def main() -> None:
     if args.pictures_only:
         pictures(args.strategies, args.cells, DOCS)
         return
+    out = args.out or DOCS / f"faults-{args.on_loss}.json"
     results: dict = {"cells": args.cells, "seed": SEED, "share_removed": SHARE, "spares": SPARES}
+    results["on_loss"] = args.on_loss
     curves = {}
     for strategy in args.strategies:
         started = time.perf_counter()
         results[strategy] = {}
         for spares in (False, True):
-            formed = form(strategy, args.cells, spares)
+            formed = form(strategy, args.cells, spares, on_loss=args.on_loss)
             key = "with spares" if spares else "no spares"
             results[strategy][key] = {"formed_in": formed.step_count}
             for kind in ("random", "block"):
@@ -203,11 +215,11 @@ def main() -> None:
                     curves[strategy] = curve
                 print(strategy, key, kind, figures, flush=True)
             results[strategy][key]["rate"] = under_rate(
-                strategy, args.cells, spares, RATES[strategy]
+                strategy, args.cells, spares, RATES[strategy], args.on_loss
             )
             print(strategy, key, "rate", results[strategy][key]["rate"], flush=True)
         print(f"{strategy}: {time.perf_counter() - started:.0f} s", flush=True)
-        args.out.write_text(json.dumps(results, indent=2) + "\n")
+        out.write_text(json.dumps(results, indent=2) + "\n")
     if not args.no_pictures:
         coverage_plot(curves, DOCS / "fault-coverage.png")
         healing_picture(DOCS / "faults-healing.png")

@@ -21,8 +21,11 @@ def test_the_fault_figures_run_on_a_small_disc(tmp_path):
     command += ["--no-pictures", "--out", str(out)]
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
     subprocess.run(command, cwd=ROOT, env=env, check=True, capture_output=True, timeout=300)
-    healed = json.loads(out.read_text())["optimal"]["with spares"]
+    figures = json.loads(out.read_text())
+    healed, short = figures["optimal"]["with spares"], figures["optimal"]["no spares"]
     assert healed["random"]["final_coverage"] == 1.0 and healed["random"]["overlaps"] == 0
+    assert figures["on_loss"] == "keep" and short["random"]["final_scale"] == 1.0
+    assert short["random"]["cells_left_open"] == short["random"]["robots_removed"]
 
 
 def pictures_script(*args: str, timeout: int = 300) -> str:

@@ -240,7 +240,8 @@ def settings_table() -> str:
         if spec.kind is FLAG:
             cli = f"`{flag}`"
         elif spec in FLAGGED:
-            metavar = spec.kind.metavar if spec.choices is None else "|".join(spec.choices)
+            # a bare | would split the table's cell, even inside a code span
+            metavar = spec.kind.metavar if spec.choices is None else "\\|".join(spec.choices)
             cli = f"`{flag} {metavar}`"
         else:
             cli = spec.extra["cli"]

@@ -208,6 +208,7 @@ class RunConfig:
         files="`[[faults]]`; sweeps: `fail`, `stall`, `fail_region`",
     )
     failure_rate: float = same_as(FAILURE_RATE, group="faults")
+    on_loss: str = same_as(Params, "on_loss", group="faults")
 
     def __post_init__(self) -> None:
         for spec in SETTINGS:
@@ -228,6 +229,7 @@ class RunConfig:
             Limits(self.max_speed, self.max_accel),
             self.senses(),
             speed_variation=self.speed_variation,
+            on_loss=self.on_loss,
         )
 
     @property

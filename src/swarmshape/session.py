@@ -220,7 +220,10 @@ def _fault_summary(metrics: dict[str, Any]) -> str:
     recovered = [f["recovery_steps"] for f in faults if f["recovery_steps"] is not None]
     slowest = f", the slowest in {_count(max(recovered), 'step')}" if recovered else ""
     stalls = metrics["cells_lost_to_stalls"]
-    lost = f" ({_count(stalls, 'cell')} lost to stalled robots)" if stalls else ""
+    notes = [f"{_count(stalls, 'cell')} lost to stalled robots"] if stalls else []
+    if metrics["steps"] is not None and metrics["cells_left_open"]:  # formed, short of robots
+        notes.append(f"{_count(metrics['cells_left_open'], 'cell')} left open: too few robots")
+    lost = f" ({'; '.join(notes)})" if notes else ""
     return (
         f"; {_count(len(faults), 'fault')}: {metrics['robots_lost']:,} robots lost, "
         f"{metrics['robots_stalled']:,} stalled{lost}, {len(recovered)} recovered{slowest}"

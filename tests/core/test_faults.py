@@ -1,14 +1,17 @@
-"""Faults: each kind under each strategy heals (or re-forms smaller) without overlaps, the same
-way for the same seed, and a run saved mid-fault resumes byte for byte."""
+"""Faults: each kind under each strategy heals without overlaps, keeping the shape's size (cells
+no robot is left for stay open) or, when asked, re-forming it smaller; the same way for the
+same seed, and a run saved mid-fault resumes byte for byte."""
 
 from __future__ import annotations
 
 import functools
+import json
 
 import numpy as np
 import pytest
 
 from swarmshape.check import InvariantWatch
+from swarmshape.cli import main
 from swarmshape.config import configure
 from swarmshape.core.faults import (
     FaultError,
@@ -21,10 +24,13 @@ from swarmshape.core.faults import (
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose, Shape
 from swarmshape.core.states import LOST, SETTLED, STALLED
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.experiments.results import read_rows
+from swarmshape.experiments.sweep import read_sweep, sweep
 from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import Runner, load_world, resume, save, start_cells, start_swarm
+from swarmshape.session import summary_line
 from swarmshape.strategies import available, create
 from tests.conftest import SHAPES, grid_from, world_of
 
@@ -39,6 +45,8 @@ BLOCK = grid_from("""
 ########
 .######.
 """)
+RESCALE = Params(on_loss="rescale")
+"""A run that re-forms a shape short of robots at a smaller scale (the default keeps its size)."""
 KINDS = {
     "random": (FaultEvent(0, "remove", 0.2),),
     "rectangle": (FaultEvent(0, "remove", 1.0, (0, 0, 1, 1)),),  # placed on the shape below
@@ -96,8 +104,9 @@ def test_each_fault_kind_heals_under_each_strategy(strategy, kind, spares):
     assert metrics["robots_lost"] == lost == (0 if kind == "stall" else entry["robots"])
     assert metrics["robots_stalled"] == int((swarm.state == STALLED).sum())
     mobile = int(((swarm.state != LOST) & (swarm.state != STALLED)).sum())
-    if mobile < int(BLOCK.sum()) - metrics["cells_lost_to_stalls"]:
-        assert metrics["scale"] < 1, "too few robots: the shape was re-formed smaller"
+    assert metrics["scale"] == 1 and metrics["targets"] == BLOCK.sum(), "the shape keeps its size"
+    fillable = int(BLOCK.sum()) - metrics["cells_lost_to_stalls"]
+    assert metrics["cells_left_open"] == max(0, fillable - mobile), "open only for want of robots"
     held = swarm.lattice.grid[swarm.world.targets[:, 0], swarm.world.targets[:, 1]]
     assert (held[swarm.filled] >= 0).all()
     assert (swarm.state[held[swarm.filled]] == SETTLED).all()
@@ -107,12 +116,67 @@ def test_each_fault_kind_heals_under_each_strategy(strategy, kind, spares):
 
 def test_too_few_survivors_re_form_the_shape_smaller_and_say_so():
     world = world_of(BLOCK)
-    swarm = Swarm(world, create("optimal"), 2, faults=Faults((FaultEvent(80, "remove", 0.3),)))
+    faults = Faults((FaultEvent(80, "remove", 0.3),))
+    swarm = Swarm(world, create("optimal"), 2, RESCALE, faults=faults)
     Runner(swarm, max_steps=5000).finish()
     metrics = run_metrics(swarm)
     assert swarm.complete and metrics["coverage"] == 1.0
     assert metrics["scale"] < 1 and metrics["faults"][0]["scale"] == metrics["scale"]
     assert metrics["targets"] <= world.agents - metrics["robots_lost"]
+
+
+def _formed(strategy: str, spares: int) -> Swarm:
+    swarm = Swarm(world_of(BLOCK, BLOCK.sum() + spares), create(strategy), 3)
+    Runner(swarm, max_steps=20_000).finish()
+    assert swarm.complete
+    return swarm
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_one_robot_lost_from_a_formed_shape_leaves_its_size_and_a_hole(strategy):
+    """No spare robot: the hole stays open, the shape keeps every cell, and the run ends at
+    once (every robot that can move rests on the shape)."""
+    swarm = _formed(strategy, 0)
+    robot = swarm.lattice.grid[tuple(swarm.world.targets[len(swarm.world.targets) // 2])]
+    swarm.fail(np.array([robot]))
+    assert swarm.world.groups[0].shape.scale == 1 and len(swarm.world.targets) == BLOCK.sum()
+    assert swarm.complete and swarm.faults.log[0]["recovery_steps"] == 0
+    steps = swarm.step_count
+    Runner(swarm, max_steps=steps + 500).finish()
+    metrics = run_metrics(swarm)
+    assert swarm.step_count == steps and metrics["cells_left_open"] == 1
+    assert metrics["coverage"] == round(1 - 1 / BLOCK.sum(), 6) and metrics["scale"] == 1
+
+
+@pytest.mark.parametrize("strategy", REPAIRING)
+def test_robots_lost_from_a_formed_shape_are_replaced_by_spares(strategy):
+    swarm = _formed(strategy, 6)
+    settled = np.flatnonzero(swarm.state == SETTLED)
+    swarm.fail(settled[:: len(settled) // 4][:4])
+    Runner(swarm, max_steps=swarm.step_count + 20_000).finish()
+    metrics = run_metrics(swarm)
+    assert swarm.complete and metrics["coverage"] == 1.0 and metrics["cells_left_open"] == 0
+    assert metrics["targets"] == BLOCK.sum() and metrics["scale"] == 1
+    assert (swarm.state == SETTLED).sum() == BLOCK.sum(), "4 of the 6 spares filled the holes"
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_a_run_left_short_of_robots_while_forming_ends_with_its_open_cells_counted(strategy):
+    """A third of the robots removed early: the others form what they can of the full-size
+    shape, and the run ends then, not at its step limit, saying how many cells stayed open."""
+    world = world_of(BLOCK)
+    faults = Faults((FaultEvent(10, "remove", 12),))
+    swarm = Swarm(world, create(strategy), 4, faults=faults)
+    watch = InvariantWatch()
+    Runner(swarm, [watch], max_steps=20_000).finish()
+    assert watch.problems == [] and swarm.overlap_total == 0
+    metrics = run_metrics(swarm)
+    assert swarm.complete and swarm.step_count < 20_000
+    assert metrics["scale"] == 1 and metrics["targets"] == BLOCK.sum()
+    assert (swarm.state == SETTLED).sum() == BLOCK.sum() - 12, "every survivor rests on it"
+    assert metrics["cells_left_open"] == 12 and metrics["steps"] == swarm.step_count
+    assert metrics["coverage"] == round(1 - 12 / BLOCK.sum(), 6)
+    assert "0 stalled (12 cells left open: too few robots), 1 recovered" in summary_line(metrics)
 
 
 def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
@@ -122,7 +186,8 @@ def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
     grid = grid_from("#..## ##.#. .##.. ##.##")
     events = ((0, "remove", 0.081), (125, "stall", 0.341), (78, "stall", 0.471, (6, 3, 4)))
     faults = Faults(tuple(FaultEvent(*event) for event in events))
-    swarm = Swarm(world_of(grid, int(grid.sum()) - 1), create("paper"), 6034845, faults=faults)
+    world = world_of(grid, int(grid.sum()) - 1)
+    swarm = Swarm(world, create("paper"), 6034845, RESCALE, faults=faults)
     Runner(swarm, max_steps=2500).finish()
     assert (swarm.state == STALLED).sum() == 5 and swarm.faults.log[-1]["scale"] < 0.8
     assert swarm.complete and swarm.filled.any()
@@ -140,7 +205,7 @@ def test_a_shape_dead_at_every_copy_where_it_stands_re_forms_nearby(strategy, ro
     world = build_world(
         [GroupSpec("g", Shape(np.ones((3, 3), bool)), (1, 2, 3), 9, pose)], (26, 26)
     )
-    swarm = Swarm(world, create(strategy), 3)
+    swarm = Swarm(world, create(strategy), 3, RESCALE)
     watch = InvariantWatch()
     Runner(swarm, [watch], max_steps=5000).finish()
     assert swarm.complete
@@ -188,7 +253,9 @@ def test_an_early_fault_on_a_shipped_shape_heals(shape, strategy, seed, event, s
     - the stalls on the square and the ring: movers going round a stalled robot traded
       targets by lattice distance, or pushed a settled robot that went straight back into
       them, and the target came back to them every other step."""
-    config = configure(SHAPES / f"{shape}.png", seed=seed, strategy=strategy, faults=(event,))
+    config = configure(
+        SHAPES / f"{shape}.png", seed=seed, strategy=strategy, faults=(event,), on_loss="rescale"
+    )
     world = load_world(config)
     swarm = start_swarm(config, world, start_cells(config, world))
     Runner(swarm, max_steps=1500).finish()
@@ -319,7 +386,8 @@ def test_a_group_left_with_no_robot_that_can_move_ends_the_run_once_the_other_ha
 
 def _one_cell_beside(starts: list[tuple[int, int]], agents: int, strategy: str) -> Swarm:
     """Group 0 forms one cell at (4, 4), its seeds on two sides; group 1 a 2x2 square away
-    from it. Group 0's two robots and the first of group 1's start at `starts`."""
+    from it. Group 0's two robots and the first of group 1's start at `starts`. A group short
+    of robots re-forms smaller."""
     cell = Shape(np.ones((1, 1), bool))
     specs = [
         GroupSpec("a", cell, (1, 2, 3), 2, Pose(4, 4)),
@@ -327,7 +395,7 @@ def _one_cell_beside(starts: list[tuple[int, int]], agents: int, strategy: str) 
     ]
     world = build_world(specs, (24, 16))
     rest = [(14 + 2 * k, 10) for k in range(2 + agents - len(starts))]
-    return Swarm(world, create(strategy), 1, start=np.array([*starts, *rest]))
+    return Swarm(world, create(strategy), 1, RESCALE, start=np.array([*starts, *rest]))
 
 
 @pytest.mark.parametrize("strategy", REPAIRING)
@@ -359,3 +427,26 @@ def test_survivors_that_stand_only_on_another_groups_shape_end_the_run_stranded(
     Runner(swarm, max_steps=3000).finish()
     assert swarm.stranded and not swarm.complete and swarm.step_count < 3000
     assert swarm.completed_at[1] is not None and (swarm.state == SETTLED).sum() == 4
+
+
+def test_on_loss_is_set_from_the_command_line_a_scenario_and_a_sweep(tmp_path, capsys):
+    """A square short of 30 % of its robots from the start keeps its size by default, and
+    re-forms smaller when the run asks: on the command line, in a scenario, in a sweep."""
+    square = SHAPES / "small-square.png"
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text(
+        f"shapes = ['{square}']\nstrategies = ['optimal']\nseeds = 1\nfail = '0.3@0'\n"
+        "on_loss = ['keep', 'rescale']\n"
+    )
+    assert sweep(read_sweep(sweep_file), tmp_path / "s.csv", tmp_path, workers=1) == 2
+    rows = {row["config.on_loss"]: row for row in read_rows(tmp_path / "s.csv")}
+    assert float(rows["keep"]["scale"]) == 1 and int(rows["keep"]["cells_left_open"]) > 0
+    assert float(rows["rescale"]["scale"]) < 1 and int(rows["rescale"]["cells_left_open"]) == 0
+    scenario = tmp_path / "short.toml"
+    scenario.write_text(f'on_loss = "rescale"\n[[groups]]\nshape = "{square}"\n')
+    assert configure(scenario).on_loss == "rescale" and configure(square).on_loss == "keep"
+    metrics = tmp_path / "m.json"
+    args = ["--headless", "--fail", "0.3@0", "--on-loss", "rescale", "--metrics", str(metrics)]
+    assert main([str(square), "--seed", "1", *args]) == 0
+    assert json.loads(metrics.read_text())["scale"] == float(rows["rescale"]["scale"])
+    assert "left open" not in capsys.readouterr().out

@@ -23,7 +23,7 @@ from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import LOST, STALLED
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.env.observe import OWN
 from swarmshape.errors import InputError
@@ -359,7 +359,7 @@ def test_robots_a_fault_takes_terminate_and_leave_and_the_api_tests_still_pass()
 
 def test_the_reward_follows_a_shape_a_fault_re_formed_smaller():
     world = build_world([GroupSpec("g", Shape(SQUARE), (1, 2, 3), 9)])
-    swarm = Swarm(world, create("optimal"), 1)
+    swarm = Swarm(world, create("optimal"), 1, Params(on_loss="rescale"))
     reward = learn.CoverageShare()
     reward.reset(swarm)
     Runner(swarm, max_steps=500).finish()

@@ -21,9 +21,14 @@
 - ``robots_lost``: robots a fault removed; ``robots_stalled``: robots stopped for good where
   they stand; ``cells_lost_to_stalls``: targets a stalled robot holds or cuts off, which no
   robot can fill (they count against ``coverage``; a run ends when every other target is filled).
+- ``cells_left_open``: targets neither filled nor lost to stalls at the end. A shape that
+  keeps its size when faults leave it fewer robots than cells (``on_loss = "keep"``, the
+  default) is formed once every robot that can move rests on it, with these cells open; with
+  ``on_loss = "rescale"`` it is re-formed smaller instead, and a formed run leaves none.
 - ``faults``: one entry per fault event (`swarmshape.core.faults.LOG_KEYS`): its ``step``,
   ``kind``, ``robots``, ``coverage_before`` and ``coverage_after`` it, ``recovered_at`` (the
-  step every target the survivors can reach was filled again, or None) and ``recovery_steps``,
+  step every target the survivors can reach was filled again, or every survivor rests on the
+  shape when they are too few to fill it, or None) and ``recovery_steps``,
   and the ``scale`` after it (below the one before when the survivors were too few).
 - ``scale``: the final scale (smaller than at the start when a fault left too few robots).
 """
@@ -152,6 +157,7 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
         "robots_lost": swarm.faults.lost,
         "robots_stalled": int((swarm.state == STALLED).sum()),
         "cells_lost_to_stalls": int(swarm.dead.sum()),
+        "cells_left_open": int((~swarm.filled & ~swarm.dead).sum()),
         "faults": [dict(entry) for entry in swarm.faults.log],
         **_totals_against_bounds(groups, steps),
         "groups": groups,

@@ -60,8 +60,9 @@ class Strategy(Plugin):
 
     def on_fault(self, swarm: SwarmView, group: int, robots: np.ndarray) -> None:
         """A fault took `robots` of `group` (removed, or stalled for good): their cells are
-        open again. Default: idle robots take the open cells, as after a reshape. (A group
-        left too short of robots is re-formed smaller afterwards, through `on_reshape`.)"""
+        open again. Default: idle robots take the open cells, as after a reshape. (With
+        ``on_loss = "rescale"``, a group left too short of robots is re-formed smaller
+        afterwards, through `on_reshape`.)"""
         swarm.recruit(group)
 
     def drive(self, swarm: Swarm) -> Steering:

@@ -22,7 +22,7 @@ from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.faults import Faults
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, Limits, move, positions, resolve_claims
-from swarmshape.core.options import option, spec_of
+from swarmshape.core.options import TEXT, option, spec_of
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING, State
@@ -60,9 +60,18 @@ class Params:
         at_least=0.0,
         at_most=0.9,
     )
+    on_loss: str = option(
+        "keep",
+        "when faults leave a shape fewer robots than cells: keep its size (spares and idle "
+        "robots heal it, cells no robot is left for stay open) or rescale (re-form it at the "
+        "largest scale the survivors can fill)",
+        kind=TEXT,
+        choices=("keep", "rescale"),
+    )
 
     def __post_init__(self) -> None:
         spec_of(Params, "speed_variation").check(self.speed_variation)
+        spec_of(Params, "on_loss").check(self.on_loss)
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,6 +225,7 @@ class Swarm:
             "wander_rate": self.params.wander_rate,
             "patience": self.params.patience,
             "speed_variation": self.params.speed_variation,
+            "on_loss": self.params.on_loss,
             "senses": dataclasses.asdict(self.params.senses),
             "rng": self.rng.bit_generator.state,
             "step": self.step_count,
@@ -250,7 +260,10 @@ class Swarm:
         except InputError as error:
             raise saved.error("senses", f"are not valid ({error})") from None
         speed_variation = saved.number("speed_variation", 0, 0.9)
-        params = Params(limits, senses, wander_rate, patience, speed_variation)
+        on_loss = saved.text("on_loss")
+        if not spec_of(Params, "on_loss").allows(on_loss):
+            raise saved.error("on_loss", f"is {on_loss!r}, not keep or rescale")
+        params = Params(limits, senses, wander_rate, patience, speed_variation, on_loss)
         swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
         swarm._restore_arrays(saved)
         swarm._restore_rng(saved)
@@ -531,9 +544,10 @@ class Swarm:
     def fail(self, robots: np.ndarray, kind: str = "remove", label: str | None = None) -> None:
         """A fault strikes `robots` now: ``remove`` takes them out of the run, ``stall`` stops
         them for good where they stand (see `swarmshape.core.faults`). The targets they had
-        filled open up, the driver forgets them and refills the gaps, a group left with fewer
-        robots than cells it can fill is re-formed at the largest scale its survivors can fill,
-        and the fault goes into `faults.log` (under `label`, default `kind`)."""
+        filled open up, the driver forgets them and refills the gaps (with ``on_loss =
+        "rescale"``, a group left with fewer robots than cells it can fill is re-formed at the
+        largest scale its survivors can fill), and the fault goes into `faults.log` (under
+        `label`, default `kind`)."""
         stall = kind == "stall"
         robots = np.unique(np.asarray(robots, dtype=np.int64))
         robots = robots[(self.state[robots] != LOST) & ~(stall & (self.state[robots] == STALLED))]
@@ -605,7 +619,11 @@ class Swarm:
         """Too few robots left to fill the group's reachable cells, or none of them left to
         fill: form the same shape at the largest scale the survivors can fill and reach (the
         paper's answer to too few robots, live; stalled robots may wall off a small copy). If
-        every copy where the shape stands is dead, the survivors form one nearby instead."""
+        every copy where the shape stands is dead, the survivors form one nearby instead.
+        Only when the run asks for it (``on_loss = "rescale"``): by default a shape keeps
+        its size, and the cells no robot is left for stay open."""
+        if self.params.on_loss != "rescale":
+            return
         mobile = int((self._mobile() & (self.group == group)).sum())
         shape, pose = self.world.groups[group].shape, self.world.groups[group].pose
         reachable = self._reachable(group)
@@ -659,10 +677,17 @@ class Swarm:
 
     def _whole(self, group: int) -> bool:
         """Every target of `group` is filled or lost to stalled robots (see `dead`), and not
-        every one is lost: a shape left with no cell to fill is not formed."""
+        every one is lost: a shape left with no cell to fill is not formed. A shape that keeps
+        its size when faults leave it short of robots (`Params.on_loss`) is formed as far as
+        it can be once every robot of it that can still move rests on one of its targets: the
+        cells left open wait for nobody."""
         mine = self.world.target_group == group
         filled, dead = self.filled[mine], self.dead[mine]
-        return bool((filled | dead).all()) and (bool(filled.any()) or not dead.any())
+        if (filled | dead).all():
+            return bool(filled.any()) or not dead.any()
+        if self.params.on_loss != "keep" or not self.faults.log or not filled.any():
+            return False  # only a fault (each one logged) leaves a group short of robots
+        return int(filled.sum()) == int((self._mobile() & (self.group == group)).sum())
 
     def _find_dead(self) -> np.ndarray:
         """Targets held by a stalled robot, or cut off by stalled robots (with the seeds and the

@@ -24,9 +24,10 @@ from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write, readable_file
 
 FORMAT = "swarmshape state"
-VERSION = 4
-"""4: a run keeps its plug-in's options and its senses; 3 kept the paper's order as a run
-setting. 3: runs keep their faults (schedule, log, lost robots); 2 could not hold them."""
+VERSION = 5
+"""5: a run keeps what it does on losing robots (`on_loss`). 4: a run keeps its plug-in's
+options and its senses; 3 kept the paper's order as a run setting. 3: runs keep their faults
+(schedule, log, lost robots); 2 could not hold them."""
 MANIFEST = "manifest"
 MAX_BYTES = 8 * 2**30
 """Largest state, uncompressed: about what a million robots on the largest arena take."""
