@@ -327,6 +327,16 @@ def test_an_idle_window_says_why_where_the_frame_rate_stood(viewer):
     assert "idle: formed, nothing moves" in viewer.status()
 
 
+def test_a_formed_shape_short_of_a_robot_says_how_many_cells_stay_open(viewer):
+    while not viewer.idle:
+        viewer.tick()
+    viewer.swarm.fail(np.array([0]))  # no spares: the shape keeps its size, with a hole
+    while not viewer.idle:
+        viewer.tick()
+    assert len(viewer.swarm.filled) == 4
+    assert "idle: formed as far as the robots go, 1 cell open" in viewer.status()
+
+
 def test_a_notice_leaves_the_key_help_in_view(viewer):
     viewer.tick()
     press(viewer, pygame.K_r)

@@ -197,6 +197,10 @@ class Viewer:
         if not runner.finished or moving:
             return None
         if swarm.complete:
+            open_cells = int((~swarm.filled & ~swarm.dead).sum())
+            if open_cells:  # faults left fewer robots than cells, and the shape kept its size
+                cells = "cell" if open_cells == 1 else "cells"
+                return f"formed as far as the robots go, {open_cells:,} {cells} open"
             return "formed, nothing moves"
         if swarm.stranded:
             return "stranded: no robot can reach the shape"
