@@ -921,6 +921,7 @@ def state_case(pick: Pick, paths: Paths) -> list[str]:
     (paths.folder / "fuzz.state").write_bytes(mutated_state(pick, source))
     argv = ["--load-state", "fuzz.state"]
     extra = pick.choice([[], [], ["--save-state", "fuzz.state"], ["--metrics", "m.json"],
+                         ["--metrics", "fuzz.state"], ["--trace", "fuzz.state", "--force"],
                          ["--trace", "t.csv", "--positions", "p.npz"], ["--strategy", "paper"],
                          ["--record", "r.gif", "--record-size", "64x48"]])  # fmt: skip
     return headless(pick, argv + extra)
@@ -1243,6 +1244,9 @@ class Named:
         """What a headless run that ends (exit 0 or 3) must have written: path -> option."""
         self.summary = False
         """Whether the command is a headless run, which ends in a summary line."""
+        self.inputs: set[str] = set()
+        """Files the run reads: never changed, even when named as an output with --force
+        (but a state saved over the one it resumes)."""
         found = parsed(case.argv)
         self.command = found[0] if found else None
         if found is None:
@@ -1250,6 +1254,7 @@ class Named:
         command, args = found
         if command in ("run", "edit"):
             self.summary = command == "run" and args.headless and not args.preview
+            self._inputs(case.folder, args)
             for name in ("metrics", "record", "trace", "save_state", "positions"):
                 self._file(getattr(args, name, None))
                 if getattr(args, name, None) is not None and self.summary:
@@ -1275,6 +1280,21 @@ class Named:
             for form in args.format or ["png"]:
                 for plot in ("coverage", "steps"):
                     self._file(out / f"{plot}.{form}")
+
+    def _inputs(self, folder: Path, args: Any) -> None:
+        """Note the files a run reads (see `inputs`)."""
+        from swarmshape.session import scenario_images
+
+        read = [args.start if isinstance(args.start, Path) else None, args.path]
+        if args.load_state is not None and args.load_state != args.save_state:
+            read.append(args.load_state)
+        if args.path is not None and args.path.suffix.lower() == ".toml":
+            with contextlib.suppress(OSError, ValueError):
+                read += scenario_images(folder / args.path)
+        module = (args.strategy or "").rpartition(":")[0]
+        read.append(Path(module) if module.endswith(".py") else None)
+        with contextlib.suppress(ValueError):  # a NUL in a name
+            self.inputs = {self._relative(path) for path in read if path is not None}
 
     def _relative(self, path: Path | str) -> str:
         real = os.path.realpath(os.path.join(self.root, path))
@@ -1321,6 +1341,8 @@ class Named:
     def allows(self, relative: str) -> bool:
         """Whether the entry at `relative` may change."""
         real = self._relative(relative)
+        if real in self.inputs:
+            return False
         if relative in self.files or real in self.files:
             return True
         parent, name = os.path.split(relative)

@@ -94,6 +94,20 @@ def test_the_rules_catch_what_they_promise(tmp_path):
     ]
 
 
+def test_an_input_named_as_an_output_may_still_not_change(tmp_path):
+    """Issue 29, case 1: an output over a file the run reads is a loss even with --force."""
+    (tmp_path / "shape.png").write_text("the user's picture")
+    argv = ["shape.png", "--metrics", "shape.png", "--force"]
+    named = fuzzing.Named(fuzzing.Case("command line", argv, tmp_path, False))
+    before = fuzzing.snapshot(tmp_path)
+    (tmp_path / "shape.png").write_text("{}")
+    found = fuzzing.problems(named, fuzzing.Outcome(2, "", "swarmshape: error: x\n", 0), before,
+                             fuzzing.snapshot(tmp_path))  # fmt: skip
+    assert found == ["changed what it was not asked to: shape.png"]
+    resumed = ["--load-state", "s.state", "--save-state", "s.state"]
+    assert fuzzing.Named(fuzzing.Case("state file", resumed, tmp_path, False)).allows("s.state")
+
+
 @examples(50)
 @given(data=st.data())
 def test_command_lines(material, data):

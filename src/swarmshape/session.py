@@ -11,7 +11,8 @@ import dataclasses
 import json
 import os
 import sys
-from collections.abc import Callable
+import tomllib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,7 +25,7 @@ from swarmshape.core.world import World, blank_world
 from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
-from swarmshape.io.files import check_output, distinct_outputs, write_text
+from swarmshape.io.files import check_output, distinct_outputs, identity, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour
 from swarmshape.runs import Observer, Runner, load_world, resume, save, start_cells, start_swarm
 
@@ -52,15 +53,25 @@ class Outputs:
     positions_every: int = 1
     force: bool = False
 
-    def check(self, resumed: Path | None = None) -> None:
-        """Fail before the run, not after it, when an output cannot be written or would
-        replace a file the user did not ask to replace (`force`, or the state being resumed)."""
+    def check(self, inputs: Mapping[Path, str] | None = None, resumed: Path | None = None) -> None:
+        """Fail before the run, not after it, when an output cannot be written, would replace
+        one of the run's `inputs` (path: what it is to the run), or would replace a file the
+        user did not ask to replace (`force`; `--save-state` may replace the state `resumed`,
+        which is one of the inputs: the run goes on where it was saved)."""
         named = [(f"--{o.replace('_', '-')}", getattr(self, o)) for o in OUTPUT_OPTIONS]
         named = [(flag, path) for flag, path in named if path is not None]
         distinct_outputs(named)
+        read = {identity(path): what for path, what in (inputs or {}).items()}
+        read.pop(None, None)
         for flag, path in named:
-            may_replace = self.force or (resumed is not None and _same(path, resumed))
-            check_output(path, flag, may_replace=may_replace, folder=flag == "--frames")
+            continues = flag == "--save-state" and resumed is not None and _same(path, resumed)
+            check_output(
+                path,
+                flag,
+                may_replace=self.force or continues,
+                folder=flag == "--frames",
+                inputs={k: v for k, v in read.items() if not continues or k != identity(resumed)},
+            )
 
     def observers(self) -> list[Observer]:
         """Recording and tracing, as asked for."""
@@ -95,7 +106,7 @@ class Session:
     def start(self) -> dict[str, Any] | None:
         """Run it, write its outputs, print its summary; return its metrics (None when the
         editor closed before any swarm ran)."""
-        self.outputs.check(self.resume)
+        self.outputs.check(self._inputs(), self.resume)
         config, world, make_swarm = self._prepare()
         observers = self.outputs.observers()
         if self.window or self.editing:
@@ -115,6 +126,24 @@ class Session:
             write_text(self.outputs.metrics, text)
         say(summary_line(metrics))
         return metrics
+
+    def _inputs(self) -> dict[Path, str]:
+        """Every file the run reads, and what it is to the run (for messages)."""
+        if self.resume is not None:
+            found, code = {self.resume: "the state this run resumes"}, self.strategy
+        else:
+            shape, code = self.config.shape_path, self.config.strategy
+            if shape.suffix.lower() == ".toml":
+                found = {shape: "its scenario"}
+                found |= {image: "an image of its scenario" for image in scenario_images(shape)}
+            else:
+                found = {shape: "its image"}
+            if isinstance(self.config.start, Path):
+                found[self.config.start] = "its start cells"
+        module = (code or "").rpartition(":")[0]
+        if module.endswith(".py"):
+            found[Path(module)] = "its strategy's code"
+        return found
 
     def _prepare(self) -> tuple[RunConfig, World, Callable[[World], Swarm]]:
         """The run's description, its first world, and how the run (and the window's restart)
@@ -239,4 +268,16 @@ def _count(number: int, thing: str) -> str:
 
 
 def _same(path: Path, other: Path) -> bool:
-    return path.resolve() == other.resolve()
+    return path.resolve() == other.resolve() or identity(path) == identity(other) is not None
+
+
+def scenario_images(path: Path) -> list[Path]:
+    """The images a scenario file names (those it names as text; the scenario's reader checks
+    the rest, and has already read this file's settings)."""
+    try:
+        groups = tomllib.loads(path.read_text(encoding="utf-8")).get("groups")
+    except (OSError, ValueError, RecursionError):
+        return []
+    tables = groups if isinstance(groups, list) else []
+    shapes = [table.get("shape") for table in tables if isinstance(table, dict)]
+    return [path.parent / shape for shape in shapes if isinstance(shape, str)]

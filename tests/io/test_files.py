@@ -165,3 +165,55 @@ def test_a_closed_stdout_still_runs_to_the_end_and_writes_the_metrics(tmp_path):
     _, err = process.communicate(timeout=60)
     assert process.returncode == 0 and err == b""
     assert '"coverage": 1.0' in metrics.read_text()
+
+
+def test_an_output_never_replaces_the_state_the_run_resumes(tmp_path, capsys):
+    """Issue 29, case 1: a resume wrote its metrics over the state it resumed (no --force).
+    Named as it is, through a symlink or a hard link, with --force or without: refused."""
+    state = tmp_path / "run.state"
+    assert main([LINE, "--headless", "--max-steps", "5", "--save-state", str(state)]) == 3
+    saved = state.read_bytes()
+    (tmp_path / "link.csv").symlink_to(state)
+    (tmp_path / "hard.gif").hardlink_to(state)
+    for option, out in [("--metrics", state), ("--positions", tmp_path / "link.csv"),
+                        ("--record", tmp_path / "hard.gif"), ("--trace", state)]:  # fmt: skip
+        for force in ([], ["--force"]):
+            argv = ["--load-state", str(state), "--headless", "--max-steps", "9", option, str(out)]
+            assert main([*argv, *force]) == 2
+            err = capsys.readouterr().err
+            assert f"{option} would replace the state this run resumes" in err, err
+    assert state.read_bytes() == saved
+
+
+@pytest.mark.parametrize(
+    ("inputs", "output", "what"),
+    [
+        ([LINE], "{shape}", "its image"),
+        (["{dir}/s.toml"], "{dir}/s.toml", "its scenario"),
+        (["{dir}/s.toml"], "{dir}/dot.png", "an image of its scenario"),
+        ([LINE, "--start", "{dir}/start.csv"], "{dir}/start.csv", "its start cells"),
+        ([LINE, "--strategy", "{dir}/mine.py:Mine"], "{dir}/mine.py", "its strategy's code"),
+    ],
+)
+def test_an_output_never_replaces_an_input_of_the_run_even_with_force(
+    tmp_path, capsys, inputs, output, what
+):
+    shape = tmp_path / "line.png"
+    shape.write_bytes(Path(LINE).read_bytes())
+    (tmp_path / "dot.png").write_bytes(Path(LINE).read_bytes())
+    (tmp_path / "s.toml").write_text('[[groups]]\nshape = "dot.png"\n')
+    (tmp_path / "start.csv").write_text("x,y\n")
+    (tmp_path / "mine.py").write_text(
+        "from swarmshape.strategies.concurrent import Optimal\nclass Mine(Optimal):\n"
+        "    name = 'mine'\n"
+    )
+    fill = {"shape": shape, "dir": tmp_path}
+    argv = [arg.format(**fill) for arg in inputs]
+    if argv[0] == LINE:
+        argv[0] = str(shape)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    out = output.format(**fill)
+    assert main([*argv, "--headless", "--metrics", out, "--force"]) == 2
+    err = capsys.readouterr().err
+    assert f"--metrics would replace {what}; name another file" in err, err
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import stat
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 from swarmshape.errors import InputError
@@ -101,10 +101,19 @@ def readable_file(path: Path, expected: str, error: type[InputError] = InputErro
     return path
 
 
-def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = False) -> None:
+def check_output(
+    path: Path,
+    flag: str,
+    *,
+    may_replace: bool,
+    folder: bool = False,
+    inputs: Mapping[tuple[int, int], str] | None = None,
+) -> None:
     """Refuse, before a run, an output that cannot be written there, that is not a regular file
-    (or, for a `folder` output, a folder), or that would replace an existing file (or fill a
-    non-empty folder) without `may_replace`. A symlink counts as the file it points to."""
+    (or, for a `folder` output, a folder), that is one of the run's `inputs` (by `identity`,
+    whatever `may_replace` says: a run never writes over what it reads), or that would replace
+    an existing file (or fill a non-empty folder) without `may_replace`. A symlink counts as the
+    file it points to."""
     target = Path(os.path.realpath(path))
     nowhere = OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
     try:
@@ -124,8 +133,21 @@ def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = Fal
             raise OutputError(f"{path}: {flag} needs a file name, and this is a folder")
         if not folder and not stat.S_ISREG(mode):
             raise OutputError(f"{path}: {flag} would replace a pipe or a device; name a file")
+        what = (inputs or {}).get(identity(target))
+        if what is not None:
+            raise OutputError(f"{path}: {flag} would replace {what}; name another file")
         if not may_replace and (not folder or any(target.iterdir())):
             raise OutputError(f"{path}: {flag} would overwrite it; add --force to allow that")
+
+
+def identity(path: str | os.PathLike[str]) -> tuple[int, int] | None:
+    """What tells files apart whatever their names (symlinks, hard links, ``..``): device and
+    inode; None for a file that is not there or cannot be looked up."""
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError):  # ValueError: a NUL byte in the name
+        return None
+    return info.st_dev, info.st_ino
 
 
 def distinct_outputs(outputs: Iterable[tuple[str, Path]]) -> None:
