@@ -230,9 +230,7 @@ class Paths:
         if odd == "dangling":
             return self._link(self._new("gone") + suffix)
         if odd == "loop":
-            name = self._new("loop") + suffix
-            (self.folder / name).symlink_to(name)
-            return name
+            return self._loop(suffix)
         if odd in ("unicode", "long"):
             stem = "ψ ✓ é\u200b" if odd == "unicode" else "l" * (250 - len(suffix))
             name = stem + suffix
@@ -260,7 +258,7 @@ class Paths:
             return self._new("out") + suffix
         odd = pick.choice(["input", "input", "folder", "missing-folder", "fifo", "dangling",
                            "link", "device", "too-long", "unicode", "subfolder", "empty",
-                           "other-suffix", "trailing-slash"])  # fmt: skip
+                           "other-suffix", "trailing-slash", "loop"])  # fmt: skip
         if odd == "input":
             return pick.choice([name for names in INPUTS.values() for name in names] + OTHERS[:2])
         if odd == "folder":
@@ -275,6 +273,8 @@ class Paths:
             return self._link(self._new("target") + suffix)
         if odd == "link":
             return self._link(pick.choice(["notes.txt", "shape.png", "results.csv"]))
+        if odd == "loop":
+            return self._loop(suffix)
         if odd == "device":
             return pick.choice(["/dev/null", "/dev/full"])
         if odd == "too-long":
@@ -292,7 +292,8 @@ class Paths:
     def folder_output(self) -> str:
         """A path given where an output folder is expected (``--frames``, ``plot --out``)."""
         odd = self.pick.choice(["new", "new", "new", "sub", ".", "shape.png", "nested", "fifo",
-                                "dangling", "/dev/null", "too-long", "empty-folder"])  # fmt: skip
+                                "dangling", "/dev/null", "too-long", "empty-folder",
+                                "loop"])  # fmt: skip
         if odd == "new":
             return self._new("frames")
         if odd == "nested":
@@ -305,6 +306,8 @@ class Paths:
             return self._link(self._new("gone"))
         if odd == "too-long":
             return "f" * 300
+        if odd == "loop":
+            return self._loop("")
         if odd == "empty-folder":
             name = self._new("empty")
             (self.folder / name).mkdir()
@@ -325,6 +328,17 @@ class Paths:
             odd = self._new("pipe") + suffix
             os.mkfifo(self.folder / odd)
         return odd
+
+    def _loop(self, suffix: str) -> str:
+        """A symlink to itself, or one of two links to each other."""
+        name = self._new("loop") + suffix
+        if self.pick.integer(0, 1):
+            (self.folder / name).symlink_to(name)
+        else:
+            other = self._new("loop") + suffix
+            (self.folder / name).symlink_to(other)
+            (self.folder / other).symlink_to(name)
+        return name
 
     def _link(self, target: str) -> str:
         name = self._new("link") + Path(target).suffix
@@ -1301,7 +1315,8 @@ class Named:
         return os.path.relpath(real, self.root)
 
     def _file(self, path: Path | None) -> None:
-        if path is not None:
+        """Note an output file; a symlink loop is no file to write and may not change."""
+        if path is not None and not os.path.islink(os.path.realpath(self.root / path)):
             self.files.add(self._relative(path))
 
     def lost_rows(self) -> bytes | None:

@@ -58,6 +58,7 @@ def bad_files(tmp_path_factory) -> Path:
     with (folder / "damaged.state").open("wb") as handle:
         text = json.dumps({**manifest, "checksum": "0"}).encode()
         np.savez(handle, manifest=np.frombuffer(text, dtype=np.uint8))
+    (folder / "loop").symlink_to("loop")
     os.mkfifo(folder / "pipe.png")
     os.mkfifo(folder / "pipe.json")
     (folder / "eps.png").write_text("%!PS-Adobe-3.0 EPSF-3.0\n%%BoundingBox: 0 0 10 10\nshowpage\n")

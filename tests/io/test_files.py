@@ -217,3 +217,17 @@ def test_an_output_never_replaces_an_input_of_the_run_even_with_force(
     err = capsys.readouterr().err
     assert f"--metrics would replace {what}; name another file" in err, err
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+@pytest.mark.parametrize("option", ["--metrics", "--trace", "--save-state", "--frames"])
+def test_a_symlink_loop_as_an_output_is_refused_and_left_alone(tmp_path, capsys, option):
+    """Issue 29, cases 2 and 12: a link to itself was replaced by the metrics, exit 0; a loop
+    as --frames was a traceback."""
+    (tmp_path / "self.out").symlink_to("self.out")
+    (tmp_path / "a.out").symlink_to("b.out")
+    (tmp_path / "b.out").symlink_to("a.out")
+    for name in ("self.out", "a.out"):
+        assert main([LINE, "--headless", option, str(tmp_path / name), "--force"]) == 2
+        err = capsys.readouterr().err
+        assert f"{name}: {option} names a symlink that leads back to itself" in err, err
+    assert sorted(os.readlink(p) for p in tmp_path.iterdir()) == ["a.out", "b.out", "self.out"]

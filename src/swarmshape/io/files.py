@@ -115,6 +115,8 @@ def check_output(
     an existing file (or fill a non-empty folder) without `may_replace`. A symlink counts as the
     file it points to."""
     target = Path(os.path.realpath(path))
+    if os.path.islink(target):  # realpath stops at a link it cannot resolve: a loop
+        raise OutputError(f"{path}: {flag} names a symlink that leads back to itself; name a file")
     nowhere = OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
     try:
         longest = os.pathconf(target.parent, "PC_NAME_MAX")
