@@ -45,6 +45,8 @@ FRAME_FILES = "frame-[0-9][0-9][0-9][0-9][0-9][0-9][0-9].png"
 TEMP_PREFIX = ".swarmshape-"
 PROGRESS = re.compile(r"^swarmshape: (step \d+, coverage .*|\d+/\d+ runs)$")
 """The progress lines a run or a sweep writes off a terminal every 10 s (a slow machine)."""
+STOPPED = (128 + signal.SIGTERM, -signal.SIGTERM)
+"""How a process sent SIGTERM may end: having cleaned up, or at once (before a run began)."""
 TIMEOUT = 120
 """Seconds a case may take before it counts as hung."""
 
@@ -190,6 +192,16 @@ def size(pick: Pick, valid: Sequence[str]) -> str:
     return pick.choice(valid) if pick.integer(0, 2) else pick.choice(SIZE_NOISE)
 
 
+@dataclasses.dataclass(frozen=True)
+class Ending:
+    """How a case's process may be cut short from outside (only in a process of its own)."""
+
+    file_limit: int | None = None
+    """Bytes a file may grow to before writing fails, as on a full disk."""
+    stop_after: float | None = None
+    """Seconds after which the process is sent SIGTERM."""
+
+
 class Paths:
     """Paths in a case's folder, made as they are drawn: valid inputs, missing files,
     folders, links that work and links that dangle, odd names; and with `isolated` (only in
@@ -198,6 +210,7 @@ class Paths:
     def __init__(self, pick: Pick, folder: Path, isolated: bool) -> None:
         self.pick, self.folder, self.isolated = pick, folder, isolated
         self.used_isolated = False
+        self.ending = Ending()
         self._count = 0
 
     def _new(self, stem: str) -> str:
@@ -991,6 +1004,30 @@ def special_case(pick: Pick, paths: Paths) -> list[str]:
     return ["plot", "results.csv", "--out", paths.special("")]
 
 
+OUTPUTS = {"--metrics": ".json", "--trace": ".csv", "--positions": ".csv", "--record": ".gif",
+           "--save-state": ".state", "--frames": ""}  # fmt: skip
+
+
+def ending_case(pick: Pick, paths: Paths) -> list[str]:
+    """A run with outputs that runs out of disk (a file size limit) or is sent SIGTERM on the
+    way: whatever it wrote is whole, and it leaves no temporary file."""
+    paths.used_isolated = True
+    if pick.integer(0, 1):
+        # not below what the case's own stdout and stderr take: those are files too
+        paths.ending = Ending(file_limit=pick.choice([2_000, 5_000, 20_000, 200_000]))
+    else:
+        paths.ending = Ending(stop_after=pick.choice([0.0, 0.05, 0.2, 0.5, 1.0, 2.0]))
+    argv = ["shape.png", "--cells", pick.choice(["7", "16", "30"]), "--strategy",
+            pick.choice(["optimal", "paper", "random"]), "--headless", "--max-steps",
+            pick.choice(["5", "50", "400"])]  # fmt: skip
+    for option, suffix in OUTPUTS.items():
+        if pick.integer(0, 1):
+            if option == "--positions":
+                suffix = pick.choice([".csv", ".npz"])
+            argv += [option, paths._new("out") + suffix]
+    return argv
+
+
 def command_case(pick: Pick, paths: Paths) -> list[str]:
     line = pick.choice([run_line, run_line, run_line, preview_line, check_line, other_line,
                         sweep_line, plot_line])  # fmt: skip
@@ -1006,8 +1043,9 @@ KINDS: dict[str, Callable[[Pick, Paths], list[str]]] = {
     "sweep file": sweep_case,
     "sweep results": results_case,
     "pipe or device": special_case,
+    "full disk or signal": ending_case,
 }
-"""Every kind of case; "pipe or device" cases are always isolated."""
+"""Every kind of case; "pipe or device" and "full disk or signal" cases are always isolated."""
 
 
 @dataclasses.dataclass
@@ -1016,7 +1054,9 @@ class Case:
     argv: list[str]
     folder: Path
     isolated: bool
-    """It reads a pipe or a device: run it only in a process of its own, with limits."""
+    """It reads a pipe or a device, or is cut short: run it only in a process of its own, with
+    limits."""
+    ending: Ending = Ending()
 
     def command(self) -> str:
         """How to run it again by hand."""
@@ -1028,7 +1068,7 @@ def make_case(pick: Pick, kind: str, material: Path, folder: Path, isolated: boo
     shutil.copytree(material, folder, symlinks=True)
     paths = Paths(pick, folder, isolated)
     argv = KINDS[kind](pick, paths)
-    return Case(kind, argv, folder, paths.used_isolated)
+    return Case(kind, argv, folder, paths.used_isolated, paths.ending)
 
 
 # --- running a case ----------------------------------------------------------------------------
@@ -1142,6 +1182,7 @@ class Forked:
         sys.stderr.flush()
         self.started = time.perf_counter()
         self.deadline = self.started + timeout
+        self.stop_at = case.ending.stop_after
         self.pid = os.fork()
         if self.pid == 0:
             code = 1
@@ -1161,6 +1202,9 @@ class Forked:
             pages = int(statm.read().split()[0])
         limit = pages * os.sysconf("SC_PAGE_SIZE") + MEMORY
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+        if case.ending.file_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (case.ending.file_limit,) * 2)
         if logs is not None:
             tempfile.tempdir = str(logs)
         os.chdir(case.folder)
@@ -1173,6 +1217,10 @@ class Forked:
         """The outcome, once the case has ended (or was ended for taking too long)."""
         done, wait_status = os.waitpid(self.pid, os.WNOHANG)
         status: int | None = None
+        due = self.stop_at is not None and time.perf_counter() > self.started + self.stop_at
+        if not done and due:
+            os.kill(self.pid, signal.SIGTERM)
+            self.stop_at = None
         if done:
             status = os.waitstatus_to_exitcode(wait_status)
         elif time.perf_counter() > self.deadline:
@@ -1258,6 +1306,7 @@ class Named:
         """What a headless run that ends (exit 0 or 3) must have written: path -> option."""
         self.summary = False
         """Whether the command is a headless run, which ends in a summary line."""
+        self.ending = case.ending
         self.inputs: set[str] = set()
         """Files the run reads: never changed, even when named as an output with --force
         (but a state saved over the one it resumes)."""
@@ -1332,11 +1381,14 @@ class Named:
         lost = sorted(self._old_lines - now)
         return lost[0] if lost else None
 
-    def unreadable(self) -> str | None:
-        """An output of a finished headless run that is missing or does not read back."""
+    def unreadable(self, *, written: bool = True) -> str | None:
+        """An output of a finished headless run that is missing or does not read back (or, not
+        `written`, one that is there and does not read back: a run cut short)."""
         from swarmshape.io.checkpoint import load_state
 
         for path, option in self.written.items():
+            if not written and not os.path.lexists(path):
+                continue
             try:
                 if option == "metrics":
                     assert "coverage" in json.loads(Path(path).read_text())
@@ -1385,7 +1437,7 @@ def problems(
     status = outcome.status
     if status is None:
         found.append(f"did not finish in {outcome.seconds:.0f} s")
-    elif status not in (0, 2, 3):
+    elif status not in (0, 2, 3) and (named.ending.stop_after is None or status not in STOPPED):
         found.append(f"exit status {status}")
     elif status == 3 and named.command not in ("run", "check"):
         found.append(f"exit status 3 from {named.command}")
@@ -1406,8 +1458,13 @@ def problems(
     if unasked:
         found.append(f"changed what it was not asked to: {unasked[0]}")
     new = sorted(after.keys() - before.keys())
-    if status == 2 and new:
+    cut_short = named.ending != Ending()
+    if status == 2 and new and not cut_short:
         found.append(f"refused, yet left {new[0]} behind")
+    if cut_short and named.summary and status not in (0, 3):
+        bad = named.unreadable(written=False)
+        if bad:
+            found.append(f"cut short, left an output that does not read back: {bad}")
     temporary = [path for path in after if os.path.basename(path).startswith(TEMP_PREFIX)]
     if temporary:
         found.append(f"left a temporary file: {temporary[0]}")

@@ -156,6 +156,12 @@ def test_pipes_and_devices_are_refused_not_read(material, data):
     holds(material, data, "pipe or device", isolated=True)
 
 
+@examples(8)
+@given(data=st.data())
+def test_runs_cut_short_by_a_full_disk_or_a_signal_leave_whole_files_only(material, data):
+    holds(material, data, "full disk or signal", isolated=True)
+
+
 @pytest.mark.parametrize("crash", fuzzing.FOUND, ids=lambda found: f"{found.where} {found.error}")
 def test_crashes_the_fuzz_found_stay_fixed(material, tmp_path, crash):
     """Each crash the fuzz once found is now one clear line (a regression test per crash)."""

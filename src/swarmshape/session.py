@@ -7,12 +7,15 @@ onto `Outputs` and `Session` and its exit codes.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
+import signal
 import sys
+import threading
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -73,19 +76,26 @@ class Outputs:
                 inputs={k: v for k, v in read.items() if not continues or k != identity(resumed)},
             )
 
-    def observers(self) -> list[Observer]:
-        """Recording and tracing, as asked for."""
+    @contextlib.contextmanager
+    def observers(self) -> Iterator[list[Observer]]:
+        """Recording and tracing, as asked for; discarded (their temporary files removed) if
+        anything fails or stops the run before they are closed, making them included."""
         observers: list[Observer] = []
-        if self.record or self.frames:
-            from swarmshape.ui.record import Recorder  # draws with pygame, offscreen
+        try:
+            if self.record or self.frames:
+                from swarmshape.ui.record import Recorder  # draws with pygame, offscreen
 
-            size = {} if self.record_size is None else {"size": self.record_size}
-            observers.append(Recorder(self.record, self.frames, self.record_every, **size))
-        if self.trace:
-            observers.append(Trace(self.trace, self.trace_every))
-        if self.positions:
-            observers.append(Positions(self.positions, self.positions_every))
-        return observers
+                size = {} if self.record_size is None else {"size": self.record_size}
+                observers.append(Recorder(self.record, self.frames, self.record_every, **size))
+            if self.trace:
+                observers.append(Trace(self.trace, self.trace_every))
+            if self.positions:
+                observers.append(Positions(self.positions, self.positions_every))
+            yield observers
+        except BaseException:
+            for observer in observers:
+                observer.discard()
+            raise
 
 
 @dataclass(frozen=True)
@@ -108,22 +118,22 @@ class Session:
         editor closed before any swarm ran)."""
         self.outputs.check(self._inputs(), self.resume)
         config, world, make_swarm = self._prepare()
-        observers = self.outputs.observers()
-        if self.window or self.editing:
-            swarm = self._show(config, world, make_swarm, observers)
-        else:
-            swarm = make_swarm(world)
-            say(opening_line(swarm, config))
-            runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
-            runner.finish()
-        if swarm is None:
-            return None
-        if self.outputs.save_state:
-            save(swarm, self.outputs.save_state, config)
-        metrics = run_metrics(swarm)
-        if self.outputs.metrics:
-            text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
-            write_text(self.outputs.metrics, text)
+        with ended_by_signals(), self.outputs.observers() as observers:
+            if self.window or self.editing:
+                swarm = self._show(config, world, make_swarm, observers)
+            else:
+                swarm = make_swarm(world)
+                say(opening_line(swarm, config))
+                runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
+                runner.finish()
+            if swarm is None:
+                return None
+            if self.outputs.save_state:
+                save(swarm, self.outputs.save_state, config)
+            metrics = run_metrics(swarm)
+            if self.outputs.metrics:
+                text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
+                write_text(self.outputs.metrics, text)
         say(summary_line(metrics))
         return metrics
 
@@ -187,6 +197,30 @@ class Session:
         )
         viewer.run()  # closes the observers, as `Runner.finish` does
         return viewer.swarm
+
+
+class Terminated(SystemExit):
+    """The run was asked to end by a signal (SIGTERM, SIGHUP): it unwinds as after Ctrl+C,
+    so that no temporary file is left, and exits with 128 + the signal's number."""
+
+
+@contextlib.contextmanager
+def ended_by_signals() -> Iterator[None]:
+    """SIGTERM and SIGHUP raise `Terminated` for a while, instead of ending the process where
+    it stands (only the main thread receives signals; elsewhere nothing changes)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def end(number: int, _frame: object) -> None:
+        raise Terminated(128 + number)
+
+    previous = {number: signal.signal(number, end) for number in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
 
 
 def say(line: str) -> None:

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import errno
 import os
+import resource
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -231,3 +234,97 @@ def test_a_symlink_loop_as_an_output_is_refused_and_left_alone(tmp_path, capsys,
         err = capsys.readouterr().err
         assert f"{name}: {option} names a symlink that leads back to itself" in err, err
     assert sorted(os.readlink(p) for p in tmp_path.iterdir()) == ["a.out", "b.out", "self.out"]
+
+
+def little_room(limit: int):
+    """A file size limit in a child process: writes past `limit` bytes fail as on a full disk."""
+
+    def apply():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return apply
+
+
+@pytest.mark.parametrize("option", ["--positions", "--trace"])
+def test_a_stream_on_a_full_disk_is_one_line_and_leaves_nothing(tmp_path, option):
+    """Issue 29, case 3: --positions on a full disk raised again in its own clean-up (exit 1)."""
+    out = tmp_path / "out.csv"
+    command = [sys.executable, "-m", "swarmshape", str(SHAPES / "star.png"), "--headless",
+               "--seed", "1", option, str(out)]  # fmt: skip
+    done = subprocess.run(
+        command, capture_output=True, text=True, preexec_fn=little_room(5000), timeout=120
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("swarmshape: error: ") and "cannot write it" in done.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stream_that_cannot_even_flush_gives_up_in_one_line(tmp_path):
+    """What a full disk did to --positions: the write failed, and closing the file to remove
+    it failed again (its buffer could not be flushed), an internal error."""
+    streamed = files.StreamedFile(tmp_path / "out.csv")
+    streamed.handle.close()
+    streamed.handle = open("/dev/full", "w")  # noqa: SIM115 (the stream closes it)
+    with pytest.raises(OSError) as failure:
+        streamed.handle.write("x" * 100_000)
+        streamed.handle.flush()
+    streamed.handle.write("more, buffered")
+    error = streamed.failed(failure.value)
+    assert "out.csv: cannot write it (No space left on device)" in str(error)
+    assert list(tmp_path.iterdir()) == []
+    streamed.discard()  # again, as a run's clean-up does: nothing to do
+
+
+def test_frames_on_a_full_disk_leave_no_frame(tmp_path, monkeypatch, capsys):
+    """Issue 29, case 3: --frames exited 2 but left dozens of frames."""
+    from PIL import Image
+
+    real_save, saved = Image.Image.save, []
+
+    def save(self, fp, *args, **kwargs):
+        saved.append(fp)
+        if len(saved) > 12:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_save(self, fp, *args, **kwargs)
+
+    monkeypatch.setattr(Image.Image, "save", save)
+    frames = tmp_path / "frames"
+    assert main([LINE, "--headless", "--seed", "1", "--frames", str(frames)]) == 2
+    assert "No space left on device" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+    frames.mkdir()
+    (frames / "frame-0000000.png").write_text("an earlier run's")
+    saved.clear()
+    assert main([LINE, "--headless", "--seed", "1", "--frames", str(frames), "--force"]) == 2
+    assert [p.name for p in tmp_path.rglob("*")] == ["frames", "frame-0000000.png"]
+    assert (frames / "frame-0000000.png").read_text() == "an earlier run's"
+
+
+def test_a_run_that_fails_before_its_first_step_leaves_no_temporary_file(tmp_path, capsys):
+    out = [f"--trace={tmp_path / 't.csv'}", f"--positions={tmp_path / 'p.csv'}",
+           f"--frames={tmp_path / 'f'}"]  # fmt: skip
+    assert main([LINE, "--headless", "--strategy", "nope.py:X", *out]) == 2
+    assert list(tmp_path.iterdir()) == []
+    assert main([LINE, "--headless", "--trace", str(tmp_path / "t.csv"), "--positions",
+                 str(tmp_path / "p.txt")]) == 2  # fmt: skip
+    assert "--positions writes .npz or .csv" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("signal_number", [signal.SIGTERM, signal.SIGHUP])
+def test_a_terminated_run_leaves_no_temporary_file(tmp_path, signal_number):
+    """Issue 29, case 3: a run killed by SIGTERM left 22 MB of .swarmshape-* files."""
+    command = [sys.executable, "-m", "swarmshape", str(SHAPES / "star.png"), "--headless",
+               "--strategy", "paper", "--trace", "t.csv", "--positions", "p.csv", "--frames",
+               "f", "--record", "r.gif"]  # fmt: skip
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
+    process = subprocess.Popen(command, cwd=tmp_path, env=env, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 60
+    while not any(p.stat().st_size > 10_000 for p in tmp_path.glob(".swarmshape-*")):
+        assert time.monotonic() < deadline and process.poll() is None
+        time.sleep(0.05)
+    process.send_signal(signal_number)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 128 + signal_number, err
+    assert list(tmp_path.iterdir()) == []

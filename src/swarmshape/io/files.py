@@ -8,7 +8,9 @@ any other bad input.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 import stat
 import tempfile
 from collections.abc import Callable, Iterable, Mapping
@@ -75,8 +77,45 @@ class StreamedFile:
         return OutputError(f"{self.path}: cannot write it ({error.strerror or error})")
 
     def discard(self) -> None:
-        self.handle.close()
+        """Remove the temporary file; what could not be written is dropped (a full disk fails
+        the flush of the last rows as well), and a second call does nothing."""
+        with contextlib.suppress(OSError):
+            self.handle.close()
         Path(self._tmp).unlink(missing_ok=True)
+
+
+class TemporaryFolder:
+    """Files written one by one as a run goes (numbered frames), kept in a temporary folder
+    beside `target` and moved into it at `finish`; `discard` leaves nothing behind."""
+
+    def __init__(self, target: Path) -> None:
+        self.target = target
+        try:
+            self.path = Path(tempfile.mkdtemp(dir=target.parent, prefix=TEMP_PREFIX))
+        except OSError as error:
+            raise OutputError(f"{target}: cannot write there ({error.strerror})") from None
+
+    def finish(self, replaces: str) -> None:
+        """Move the files in: the whole folder if `target` is not there yet, else file by file,
+        and then remove the files of the target matching the pattern `replaces` that this
+        run did not write (an earlier run's)."""
+        try:
+            if not self.target.exists():
+                os.replace(self.path, self.target)
+                return
+            written = {path.name for path in self.path.iterdir()}
+            for name in sorted(written):
+                os.replace(self.path / name, self.target / name)
+            for stale in self.target.glob(replaces):
+                if stale.name not in written:
+                    stale.unlink()
+            self.path.rmdir()
+        except OSError as error:
+            self.discard()
+            raise OutputError(f"{self.target}: cannot write it ({error.strerror})") from None
+
+    def discard(self) -> None:
+        shutil.rmtree(self.path, ignore_errors=True)
 
 
 def write_text(path: str | os.PathLike[str], text: str) -> None:
