@@ -1307,6 +1307,8 @@ class Named:
         self.summary = False
         """Whether the command is a headless run, which ends in a summary line."""
         self.ending = case.ending
+        self.sweep: tuple[Path, Path] | None = None
+        """A sweep's file and its results file."""
         self.inputs: set[str] = set()
         """Files the run reads: never changed, even when named as an output with --force
         (but a state saved over the one it resumes)."""
@@ -1329,6 +1331,7 @@ class Named:
                 return
             out = args.out or args.file.with_suffix(".csv")
             self._file(out)
+            self.sweep = (case.folder / args.file, case.folder / out)
             real = Path(os.path.realpath(case.folder / out))
             self._file(real.with_name(f".{real.name}.lock"))
             with contextlib.suppress(OSError):  # not there, or a name too long
@@ -1405,6 +1408,20 @@ class Named:
                 return f"--{option.replace('_', '-')} {path}: {type(error).__name__} {error}"
         return None
 
+    def foreign_row(self) -> str | None:
+        """The key of a row that a sweep which ran to its end left in its results file although
+        it is none of the sweep's runs (another sweep's, or a damaged row taken for one)."""
+        from swarmshape.experiments.results import read_rows
+        from swarmshape.experiments.sweep import read_sweep, run_key
+
+        if self.sweep is None:
+            return None
+        sweep_file, out = self.sweep
+        if not out.exists():
+            return None
+        runs = {run_key(config) for config in read_sweep(sweep_file)}
+        return next((row["run"] for row in read_rows(out) if row["run"] not in runs), None)
+
     def allows(self, relative: str) -> bool:
         """Whether the entry at `relative` may change."""
         real = self._relative(relative)
@@ -1475,6 +1492,10 @@ def problems(
         bad = named.unreadable()
         if bad:
             found.append(f"wrote an output that does not read back: {bad}")
+    if named.command == "sweep" and status == 0:
+        foreign = named.foreign_row()
+        if foreign:
+            found.append(f"kept a row of a run the sweep does not have: {foreign[:80]}")
     lost = named.lost_rows()
     if lost:
         found.append(f"{named.keeps_rows}: lost the line {lost!r} without --force")
