@@ -932,8 +932,16 @@ def image_case(pick: Pick, paths: Paths) -> list[str]:
     return [*argv, "--preview"] if pick.integer(0, 4) == 0 else headless(pick, argv)
 
 
+SCENARIO_FAULTS = ["", "", "failure_rate = 0.002\n", "failure_rate = 0.05\n",
+                   "[[faults]]\nstep = 0\nkind = 'remove'\namount = 1\n",
+                   "[[faults]]\nstep = 2\nkind = 'stall'\namount = 0.3\n"]  # fmt: skip
+"""Faults for the scenario's two groups (issue 29: a group re-formed smaller after a fault
+renumbered the other group's targets, and a robot went for one past the end)."""
+
+
 def scenario_case(pick: Pick, paths: Paths) -> list[str]:
-    (paths.folder / "fuzz.toml").write_bytes(mutated_toml(pick, SCENARIO))
+    text = SCENARIO.replace("[[groups]]", pick.choice(SCENARIO_FAULTS) + "[[groups]]", 1)
+    (paths.folder / "fuzz.toml").write_bytes(mutated_toml(pick, text))
     return headless(pick, ["fuzz.toml", *options(pick, run_options(pick, paths), 1)])
 
 

@@ -64,6 +64,11 @@ class Strategy(Plugin):
         left too short of robots is re-formed smaller afterwards, through `on_reshape`.)"""
         swarm.recruit(group)
 
+    def on_renumber(self, swarm: SwarmView, renumber: np.ndarray) -> None:
+        """A group's shape changed, and with it every group's target indices: ``renumber[old]``
+        is each old target's new index, -1 where it went away. Keep target indices the strategy
+        holds in step (they would name other cells, or none). Default: it holds none."""
+
     def drive(self, swarm: Swarm) -> Steering:
         return Steering(swarm, self)
 
@@ -345,6 +350,7 @@ class Steering:
         has_target = self.target >= 0
         self.target[has_target] = renumber[self.target[has_target]]
         self.release(np.flatnonzero(has_target & (self.target < 0)))
+        self.strategy.on_renumber(self.view, renumber)
 
     def removed(self, robots: np.ndarray, stalled: bool) -> None:
         """A fault took `robots`: forget their targets, paths and messages; robots heading for a

@@ -68,6 +68,12 @@ class OneShot(Strategy):
         self._planned[swarm.group == group] = -1
         swarm.recruit(group, type(self).match)
 
+    def on_renumber(self, swarm: SwarmView, renumber: np.ndarray) -> None:
+        """Robots not yet sent off keep their planned cells, under the cells' new indices
+        (another group re-formed smaller shifted them: two-squares.toml, seed 5, crashed)."""
+        planned = self._planned >= 0
+        self._planned[planned] = renumber[self._planned[planned]]
+
     def on_fault(self, swarm: SwarmView, group: int, robots: np.ndarray) -> None:
         """A fault opened cells: the idle robots (those not yet sent off among them) are matched
         to the open cells the same way, as after a reshape."""
