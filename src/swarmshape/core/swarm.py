@@ -375,6 +375,11 @@ class Swarm:
         ]
         return all(done) and not all(self._whole(g) for g in groups)
 
+    def movable(self, group: int) -> int:
+        """How many robots of `group` can still move (neither removed nor stalled): what a new
+        shape for it may ask of it."""
+        return int((self._mobile() & (self.group == group)).sum())
+
     @property
     def present(self) -> np.ndarray:
         """Robots still in the run (not removed by a fault)."""
@@ -480,13 +485,24 @@ class Swarm:
         """Form a new shape for `group` without a restart (the live editor's hand-over).
 
         Robots on cells that stay in the shape keep them and do not move; robots whose cells
-        or targets went away wander; the strategy then hands out the open cells.
+        or targets went away wander; the strategy then hands out the open cells. A shape with
+        more cells than the group's robots that can move (`movable`) can fill is refused, and
+        nothing changes: it would never form (`Shape.fitted` makes one that fits).
         """
         old = self.world
         new = old.reshaped(group, shape, pose or old.groups[group].pose)
         seeds = new.mask(new.seeds) & ~old.mask(old.seeds)
         if (self.lattice.grid[seeds] >= 0).any():
             raise WorldError("the seeds' new cells are taken by robots; move them elsewhere")
+        cells = new.groups[group].targets
+        fillable = int(self._reachable(group)[cells[:, 0], cells[:, 1]].sum())
+        movable = self.movable(group)
+        if fillable > movable:
+            raise WorldError(
+                f"group {new.groups[group].name!r}: the new shape has {fillable:,} cells for the "
+                f"{movable:,} robots that can move: short by {fillable - movable:,}; draw fewer "
+                f"cells, or fit it with shape.fitted({movable})"
+            )
         self.filled = np.zeros(len(new.targets), dtype=bool)
         self.driver.reshaped(_renumbering(old.targets, new.targets, new.size))
         self.lattice.grid[old.mask(old.seeds)] = FREE
@@ -584,7 +600,7 @@ class Swarm:
         fill: form the same shape at the largest scale the survivors can fill and reach (the
         paper's answer to too few robots, live; stalled robots may wall off a small copy). If
         every copy where the shape stands is dead, the survivors form one nearby instead."""
-        mobile = int((self._mobile() & (self.group == group)).sum())
+        mobile = self.movable(group)
         shape, pose = self.world.groups[group].shape, self.world.groups[group].pose
         reachable = self._reachable(group)
 
