@@ -111,6 +111,56 @@ class Mine(Optimal):
     description = "the optimal strategy, from a file"
 """
 
+HOSTILE = """import sys
+import numpy as np
+from swarmshape.strategies.concurrent import Optimal
+
+
+class Raises(Optimal):
+    name = "raises"
+
+    def on_step(self, swarm):
+        if swarm.step == 2:
+            raise RuntimeError("a bug of the user's")
+        super().on_step(swarm)
+
+
+class Writes(Optimal):
+    name = "writes"
+
+    def on_step(self, swarm):
+        swarm.world.seeds[:] = 0
+        swarm.targets[0] = 3
+        swarm.target[:] = 0
+
+
+class Nobody(Optimal):
+    name = "nobody"
+
+    def on_step(self, swarm):
+        swarm.assign(np.array([-1, 10**9]), np.array([0, 0]))
+
+
+class Exits(Optimal):
+    name = "exits"
+
+    def on_step(self, swarm):
+        sys.exit(swarm.step)
+
+
+class Loops(Optimal):
+    name = "loops"
+
+    def on_step(self, swarm):
+        while swarm.step == 1:
+            pass
+        super().on_step(swarm)
+"""
+"""Strategies whose own code fails every way a user's might (issue 29): each must be one line
+naming it (exit 2), or a problem `check` reports (exit 3); `check` stops the loop."""
+HOSTILE_CLASSES = ["hostile.py:Raises", "hostile.py:Writes", "hostile.py:Nobody",
+                   "hostile.py:Exits", "broken.py:X"]  # fmt: skip
+
 INPUTS = {
     "image": ["shape.png", "sub/dot.png"],
     "scenario": ["scenario.toml"],
@@ -138,6 +188,8 @@ def make_material(folder: Path) -> Path:
     (folder / "scenario.toml").write_text(SCENARIO)
     (folder / "sweep.toml").write_text(SWEEP)
     (folder / "mine.py").write_text(STRATEGY)
+    (folder / "hostile.py").write_text(HOSTILE)
+    (folder / "broken.py").write_text("raise ImportError('broken on import')\n")
     (folder / "notes.txt").write_text("a note of the user's, not an input of any kind\n")
     np.savez(folder / "data.npz", values=np.arange(5))
     world = load_world(configure(folder / "shape.png", seed=0))
@@ -171,7 +223,7 @@ SIZE_NOISE = ["0x0", "1x1", "10x-3", "99999x99999", "25000001x1", "axb", "x", ""
 STRATEGIES = ["optimal", "greedy", "random", "paper", "mine.py:Mine", "nope", "", "a:", ":", ":B",
               ".x:Y", "os:path", "swarmshape.core.motion:Limits", "swarmshape:Strategy",
               "missing.py:X", "notes.txt:X", "sub:X", "mine.py:", "mine.py:Optimal",
-              "x" * 300, "x" * 300 + ".py:X"]  # fmt: skip
+              "x" * 300, "x" * 300 + ".py:X", *HOSTILE_CLASSES]  # fmt: skip
 ORDERS = ["outward", "left-to-right", "random", "", "inward", "OUTWARD"]
 OPTIONS = [f"order={order}" for order in ORDERS] + [
     "startup=3", "alone=-1", "alone=1e3", "patience=²", "nope=1", "=", "order", "loss_memory=nan",
@@ -469,7 +521,8 @@ def plot_line(pick: Pick, paths: Paths, file: str | None = None) -> list[str]:
 def check_line(pick: Pick, paths: Paths) -> list[str]:
     runs = pick.choice(["1", "2"]) if pick.integer(0, 3) else pick.choice(["0", "-1", "x", ""])
     steps = whole(pick, ["0", "5", "40"])
-    argv = ["check", pick.choice(STRATEGIES), "--runs", runs, "--max-steps", steps]
+    strategy = pick.choice([*STRATEGIES, "hostile.py:Loops"])
+    argv = ["check", strategy, "--runs", runs, "--max-steps", steps]
     if pick.integer(0, 1):
         argv += ["--seed", whole(pick, ["0", "5", "9223372036854775807", "18446744073709551616"])]
     return argv

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,8 @@ from swarmshape.check import check_strategy
 from swarmshape.cli import main
 from swarmshape.core.steering import Strategy
 from swarmshape.strategies import available
+from swarmshape.strategies.concurrent import Optimal
+from tests.conftest import SHAPES
 
 
 class UsesGlobalRandom(Strategy):
@@ -67,3 +71,123 @@ def test_numbers_a_check_cannot_use_are_one_clear_line(capsys, option, message):
     assert main(["check", "optimal", "--runs", "1", *option]) == 2
     captured = capsys.readouterr()
     assert captured.err == f"swarmshape: error: {message}\n" and captured.out == ""
+
+
+class Raises(Optimal):
+    name = "raises"
+
+    def on_step(self, swarm):
+        if swarm.step == 3:
+            raise ValueError("my bug")
+        super().on_step(swarm)
+
+
+class WritesItsView(Optimal):
+    name = "writes-its-view"
+
+    def on_step(self, swarm):
+        swarm.cells[0] = 5
+
+
+class NamesNobody(Optimal):
+    name = "names-nobody"
+
+    def on_step(self, swarm):
+        swarm.assign(np.array([10**6]), np.array([0]))
+
+
+class NamesAnotherGroupsTarget(Optimal):
+    name = "names-another-groups-target"
+
+    def on_step(self, swarm):
+        swarm.send(-1, 0, len(swarm.targets) - 1)
+
+
+class Exits(Optimal):
+    name = "exits"
+
+    def on_step(self, swarm):
+        sys.exit(0)
+
+
+class Loops(Optimal):
+    name = "loops"
+
+    def on_step(self, swarm):
+        if swarm.step == 2:
+            while True:
+                pass
+        super().on_step(swarm)
+
+
+class Plain(Optimal):
+    name = "plain"
+    description = "no code of its own in a step"
+
+
+FAILURES = [
+    ("Raises", "strategy 'raises' failed at step 3: ValueError: my bug (test_check.py, line"),
+    ("WritesItsView", "strategy 'writes-its-view' failed as the run started: ValueError: "
+     "assignment destination is read-only (test_check.py, line"),
+    ("NamesNobody", "strategy 'names-nobody' failed as the run started: IndexError: assign: there "
+     "is no robot 1000000 (they are 0 to"),
+    ("NamesAnotherGroupsTarget", "failed as the run started: ValueError: send: target 71 belongs "
+     "to group 1 and robot 0 to group 0 (test_check.py, line"),
+    ("Exits", "strategy 'exits' called sys.exit(0) as the run started (test_check.py, line"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "message"), FAILURES, ids=[f[0] for f in FAILURES])
+def test_a_failure_of_a_strategys_own_code_is_one_line_naming_it(capsys, name, message):
+    """Issue 29, case 9: a user strategy that raised, wrote to its view or named a robot that
+    does not exist was "internal error, please report it" (exit 1); sys.exit(0) ended the run
+    without a word."""
+    shape = str(SHAPES / ("two-squares.toml" if "Groups" in name else "line.png"))
+    assert main([shape, "--headless", "--strategy", f"tests.test_check:{name}"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("swarmshape: error: "), err
+    assert message in err[0], err[0]
+
+
+@pytest.mark.parametrize(("name", "message"), FAILURES[:1] + FAILURES[4:], ids=["raises", "exits"])
+def test_check_reports_a_strategys_failure_in_plain_words(capsys, name, message):
+    assert main(["check", f"tests.test_check:{name}", "--runs", "3"]) == 3
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].endswith("3 random shapes, each run twice: 1 problem"), out
+    assert out[1].startswith("  - shape 0 (") and message in out[1], out
+
+
+def test_check_stops_a_step_that_never_ends():
+    """Issue 29, case 9: a strategy that looped hung the check for ever."""
+    report = check_strategy(Loops, runs=2, step_seconds=0.3)
+    assert len(report.problems) == 1
+    assert report.problems[0].endswith(
+        "step 2 took over 0.3 s (is the strategy caught in a loop?); the check stopped it"
+    )
+
+
+def test_code_that_fails_as_it_loads_is_its_own_failure(tmp_path, capsys):
+    (tmp_path / "broken.py").write_text("raise RuntimeError('import boom')\n")
+    (tmp_path / "made.py").write_text(
+        "from swarmshape.strategies.concurrent import Optimal\n"
+        "class Made(Optimal):\n    name = 'made'\n    def __init__(self):\n        1 / 0\n"
+    )
+    for spec, where in ((f"{tmp_path / 'broken.py'}:X", "broken.py, line 1"),
+                        (f"{tmp_path / 'made.py'}:Made", "made.py, line 5")):  # fmt: skip
+        for command in ([str(SHAPES / "line.png"), "--headless", "--strategy", spec],
+                        ["check", spec, "--runs", "1"]):  # fmt: skip
+            code = main(command)
+            captured = capsys.readouterr()
+            said = captured.err if code == 2 else captured.out
+            assert code == (3 if command[0] == "check" and "made" in spec else 2), said
+            assert "failed as it" in said and where in said, said
+
+
+def test_a_bug_of_ours_under_a_users_strategy_stays_ours(monkeypatch, capsys):
+    from swarmshape import check
+    from swarmshape.core.steering import Steering
+
+    monkeypatch.setattr(Steering, "_who_moves", check.random_world)  # fails inside swarmshape
+    argv = [str(SHAPES / "line.png"), "--headless", "--strategy", "tests.test_check:Plain"]
+    assert main(argv) == 1
+    assert "internal error, please report it" in capsys.readouterr().err

@@ -20,11 +20,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmshape import strategies
 from swarmshape.config import RunConfig
+from swarmshape.core.guard import PluginCode
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, blank_world
+from swarmshape.errors import Terminated
 from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
@@ -117,7 +120,13 @@ class Session:
         """Run it, write its outputs, print its summary; return its metrics (None when the
         editor closed before any swarm ran)."""
         self.outputs.check(self._inputs(), self.resume)
-        config, world, make_swarm = self._prepare()
+        with self._loading():
+            config, world, prepared = self._prepare()
+
+        def make_swarm(on: World) -> Swarm:
+            with self._loading():
+                return prepared(on)
+
         with ended_by_signals(), self.outputs.observers() as observers:
             if self.window or self.editing:
                 swarm = self._show(config, world, make_swarm, observers)
@@ -136,6 +145,14 @@ class Session:
                 write_text(self.outputs.metrics, text)
         say(summary_line(metrics))
         return metrics
+
+    def _loading(self) -> contextlib.AbstractContextManager[None]:
+        """A failure of a strategy's own code (``file.py:Class``) as it is loaded and made is
+        its own, said in one line (see `core.guard`)."""
+        code = self.strategy if self.resume is not None else self.config.strategy
+        if code is None or not strategies.is_code(code):
+            return contextlib.nullcontext()
+        return PluginCode.named(code).running(" as it was loaded")
 
     def _inputs(self) -> dict[Path, str]:
         """Every file the run reads, and what it is to the run (for messages)."""
@@ -197,11 +214,6 @@ class Session:
         )
         viewer.run()  # closes the observers, as `Runner.finish` does
         return viewer.swarm
-
-
-class Terminated(SystemExit):
-    """The run was asked to end by a signal (SIGTERM, SIGHUP): it unwinds as after Ctrl+C,
-    so that no temporary file is left, and exits with 128 + the signal's number."""
 
 
 @contextlib.contextmanager

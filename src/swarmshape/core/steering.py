@@ -158,16 +158,22 @@ class SwarmView:
     # --- acting -----------------------------------------------------------------------------
 
     def assign(self, robots: np.ndarray, targets: np.ndarray) -> None:
-        """Start `robots` moving to `targets` (indices into `targets`) now."""
-        self._steering.assign(robots, targets)
+        """Start `robots` moving to `targets` (indices into `targets`, each of the robot's own
+        group) now."""
+        robots = self._steering.robots(robots, "assign")
+        self._steering.assign(robots, self._steering.targets_of(robots, targets, "assign"))
 
     def send(self, sender: int, recipient: int, target: int) -> None:
         """Message "go to `target`" to `recipient`; it arrives, and it starts, next step."""
+        recipient = int(self._steering.robots(np.array([recipient]), "send")[0])
+        target = int(
+            self._steering.targets_of(np.array([recipient]), np.array([target]), "send")[0]
+        )
         self._steering.send(sender, recipient, target)
 
     def release(self, robots: np.ndarray) -> None:
         """Let `robots` wander: they have nothing left to do."""
-        self._steering.release(robots)
+        self._steering.release(self._steering.robots(robots, "release"))
 
     def recruit(self, group: int, match: Matcher = greedy) -> None:
         """Match idle robots of `group` to its open targets with `match` and send them there."""
@@ -243,6 +249,44 @@ class Steering:
         self.strategy.restore(saved.part("strategy"), self.view)
 
     # --- what strategies call, through their view ---------------------------------------------
+
+    def robots(self, robots: np.ndarray, action: str) -> np.ndarray:
+        """`robots` as robot numbers, or an error that says which one does not exist (numpy
+        would take -1 for the last robot, and fail on 10**6 deep inside a step)."""
+        robots = np.asarray(robots)
+        n = len(self.target)
+        if robots.dtype.kind not in "iu" and robots.size:
+            raise TypeError(f"{action}: robots are whole numbers, got {robots.dtype} values")
+        robots = robots.astype(np.int64).reshape(-1)
+        wrong = robots[(robots < 0) | (robots >= n)]
+        if len(wrong):
+            raise IndexError(f"{action}: there is no robot {wrong[0]} (they are 0 to {n - 1})")
+        return robots
+
+    def targets_of(self, robots: np.ndarray, targets: np.ndarray, action: str) -> np.ndarray:
+        """`targets`, one per robot (or one for all), each a target of its robot's own group,
+        or an error that says which is not."""
+        targets = np.asarray(targets)
+        m = len(self.swarm.world.targets)
+        if targets.dtype.kind not in "iu" and targets.size:
+            raise TypeError(f"{action}: targets are whole numbers, got {targets.dtype} values")
+        try:
+            targets = np.broadcast_to(targets.astype(np.int64), robots.shape)
+        except ValueError:
+            raise ValueError(f"{action}: {targets.size} targets for {len(robots)} robots") from None
+        wrong = targets[(targets < 0) | (targets >= m)]
+        if len(wrong):
+            raise IndexError(f"{action}: there is no target {wrong[0]} (they are 0 to {m - 1})")
+        group = self.swarm.group[robots]
+        foreign = np.flatnonzero(self.swarm.world.target_group[targets] != group)
+        if len(foreign):
+            robot, target = robots[foreign[0]], targets[foreign[0]]
+            owner = self.swarm.world.target_group[target]
+            raise ValueError(
+                f"{action}: target {target} belongs to group {owner} and robot {robot} to group "
+                f"{group[foreign[0]]}"
+            )
+        return targets
 
     def send(self, sender: int, recipient: int, target: int) -> None:
         self.queue.send(self.swarm.step_count, sender, recipient, target)

@@ -19,6 +19,7 @@ from scipy import ndimage
 
 from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.faults import Faults
+from swarmshape.core.guard import PluginCode
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, Limits, move, positions, resolve_claims
 from swarmshape.core.options import option, spec_of
@@ -167,14 +168,17 @@ class Swarm:
         self.dead = np.zeros(len(world.targets), dtype=bool)
         """Targets no robot can fill: held by a stalled robot, or cut off by stalled robots
         from every robot of their group that can still move (lost coverage)."""
-        self.driver = plugin.drive(self)
-        self._index_world()
-        self.driver.start()
+        with self._code.running(" as the run started"):
+            self.driver = plugin.drive(self)
+            self._index_world()
+            self.driver.start()
 
     def _take(self, world: World, plugin: Plugin, seed: int, params: Params) -> None:
         """What a swarm is given, whether it starts afresh or resumes."""
         self.world = world
         self.plugin = plugin
+        self._code = PluginCode.of(plugin)
+        """Where the plug-in's code lives: a failure there is its own (see `core.guard`)."""
         self.seed = seed
         self.params = params
         self.rng = np.random.default_rng(seed)
@@ -205,7 +209,8 @@ class Swarm:
         }
         values |= prefixed("world", self.world.snapshot())
         values |= prefixed("faults", self.faults.snapshot()) | {"dead": self.dead}
-        return values | prefixed("driver", self.driver.snapshot())
+        with self._code.running(" while the run was saved"):
+            return values | prefixed("driver", self.driver.snapshot())
 
     @classmethod
     def restored(cls, saved: Snapshot, plugin: Plugin) -> Swarm:
@@ -241,10 +246,11 @@ class Swarm:
             raise saved.error("completed_at", "holds something other than steps")
         swarm.completed_at = completed
         swarm.faults = Faults.restored(saved.part("faults"), world.agents)
-        swarm.driver = plugin.drive(swarm)
-        swarm._index_world()
-        swarm.dead = saved.array("dead", bool, (len(world.targets),))
-        swarm.driver.restore(saved.part("driver"))
+        with swarm._code.running(" while the run was resumed"):
+            swarm.driver = plugin.drive(swarm)
+            swarm._index_world()
+            swarm.dead = saved.array("dead", bool, (len(world.targets),))
+            swarm.driver.restore(saved.part("driver"))
         return swarm
 
     def _restore_arrays(self, saved: Snapshot) -> None:
@@ -396,18 +402,24 @@ class Swarm:
     # --- one step -------------------------------------------------------------------------------
 
     def step(self) -> None:
-        if self.faults.scheduled:
-            self._strike()
-        coasting = np.flatnonzero((self.state == STALLED) & (self.ahead > 0))
-        self.driver.decide()
-        self._move()
-        self.driver.arrived()
-        self.step_count += 1
-        if len(coasting):
-            self._walls_moved(coasting)
-        self._audit()
-        self._note_completion()
-        self.faults.note(self.step_count, self.complete)
+        with self._code.running(f" at step {self.step_count}"):
+            if self.faults.scheduled:
+                self._strike()
+            coasting = np.flatnonzero((self.state == STALLED) & (self.ahead > 0))
+            self.driver.decide()
+            self._move()
+            self.driver.arrived()
+            self.step_count += 1
+            if len(coasting):
+                self._walls_moved(coasting)
+            self._audit()
+            self._note_completion()
+            self.faults.note(self.step_count, self.complete)
+
+    def figures(self) -> dict[str, Any]:
+        """What the plug-in's kind adds to the run's metrics (see `Driver.figures`)."""
+        with self._code.running(" when the run was measured"):
+            return self.driver.figures()
 
     def claim(self, robots: np.ndarray, directions: np.ndarray, origins: np.ndarray) -> np.ndarray:
         """Each robot asks for the cell one step in `direction` from the key `origin` (its own
@@ -503,14 +515,15 @@ class Swarm:
                 f"{movable:,} robots that can move: short by {fillable - movable:,}; draw fewer "
                 f"cells, or fit it with shape.fitted({movable})"
             )
-        self.filled = np.zeros(len(new.targets), dtype=bool)
-        self.driver.reshaped(_renumbering(old.targets, new.targets, new.size))
-        self.lattice.grid[old.mask(old.seeds)] = FREE
-        self.world = new
-        self._index_world()
-        self._refill()
-        self.completed_at[group] = None
-        self.driver.hand_out(group)
+        with self._code.running(f" as the shape changed at step {self.step_count}"):
+            self.filled = np.zeros(len(new.targets), dtype=bool)
+            self.driver.reshaped(_renumbering(old.targets, new.targets, new.size))
+            self.lattice.grid[old.mask(old.seeds)] = FREE
+            self.world = new
+            self._index_world()
+            self._refill()
+            self.completed_at[group] = None
+            self.driver.hand_out(group)
 
     # --- faults ---------------------------------------------------------------------------------
 
@@ -540,7 +553,8 @@ class Swarm:
         else:
             self._take_off(robots)
         self.dead = self._find_dead()
-        self.driver.removed(robots, stall)
+        with self._code.running(f" after a fault at step {self.step_count}"):
+            self.driver.removed(robots, stall)
         groups = np.unique(self.group[robots]).tolist()
         for g in range(len(self.world.groups)):  # a stall may wall off another group's cells
             self._rescale_if_short(g)
