@@ -212,7 +212,7 @@ def make_material(folder: Path) -> Path:
 
 WHOLE_NOISE = ["-1", "-7", "", "abc", "nan", "inf", "1.5", "1e3", " 3", "\u0663", "\uff11\uff12",
                "1_0", "0x10", "+4", "99999999999999999999999", "9" * 5000, "\u200b3",
-               "3\u00a0"]  # fmt: skip
+               "3\u00a0", "\u00b2", "\u2460", "1\u00b9"]  # fmt: skip
 """Text given where a whole number is expected: wrong, out of range, odd unicode (some of
 which Python reads as numbers: Arabic-Indic 3, fullwidth 12)."""
 FLOAT_NOISE = ["0", "-0.5", "2", "nan", "-nan", "inf", "1e309", "1e-320", "", "abc", "½", "0x1p-3",
@@ -445,6 +445,13 @@ def run_options(pick: Pick, paths: Paths) -> dict[str, Callable[[], list[str]]]:
         "--positions": lambda: [paths.output([".npz", ".csv", ".NPZ", ".txt"])],
         "--positions-every": lambda: [whole(pick, ["1", "4"])],
         "--metrics": lambda: [paths.output([".json", ".txt", ""])],
+        "--fail": lambda: [f"{number(pick, ['0.2', '0.5', '3'])}@{whole(pick, ['0', '2'])}"],
+        "--stall": lambda: [f"{number(pick, ['0.3', '1'])}@{whole(pick, ['1', '3'])}"],
+        "--fail-region": lambda: [
+            f"{','.join(whole(pick, ['0', '2', '4']) for _ in range(pick.integer(2, 5)))}"
+            f"@{whole(pick, ['0', '3'])}"
+        ],
+        "--failure-rate": lambda: [number(pick, ["0.002", "0.05", "0"])],
         "--force": list,
         "--colour": lambda: ["red"],
         "-x": list,

@@ -285,6 +285,19 @@ def test_events_parse_from_plain_values_and_text():
             events_from_values(bad, "faults")
 
 
+@pytest.mark.parametrize("text", ["0.2@\u00b2", "\u00b2@3", "0.2@\u2460", "1\u00b9@3"])
+def test_digits_that_int_refuses_are_one_clear_error(text):
+    """Issue 29, case 12: a superscript or circled digit passed str.isdigit, which int()
+    then refused with a traceback (--fail, --stall, --fail-region, scenario and sweep values)."""
+    with pytest.raises(FaultError, match="expects"):
+        parse_event(text, "stall", "--stall")
+    with pytest.raises(FaultError, match="expects"):
+        parse_region(f"1,2,{text.replace('@', ',')}@3" if "@3" in text else f"1,2,3,{text}")
+    with pytest.raises(FaultError, match=r"faults\[0\]"):
+        events_from_values([text], "faults")
+    assert parse_event("0.2@\u0663", "remove", "--fail").step == 3  # a digit int() reads
+
+
 def test_a_run_does_not_end_before_its_last_fault():
     world = world_of(BLOCK, BLOCK.sum() + 6)
     swarm = Swarm(world, create("optimal"), 1, faults=Faults((FaultEvent(400, "remove", 3),)))

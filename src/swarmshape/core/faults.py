@@ -126,7 +126,7 @@ def parse_event(text: str, kind: str, option: str) -> FaultEvent:
     """``AMOUNT@STEP`` (a fraction like 0.2, or a number of robots like 50) as an event."""
     amount, step = _split(text, option, "FRACTION@STEP, e.g. 0.2@300")
     try:
-        value: float | int = int(amount) if amount.strip().isdigit() else float(amount)
+        value: float | int = int(amount) if amount.strip().isdecimal() else float(amount)
     except ValueError:
         raise FaultError(f"{option} expects FRACTION@STEP, e.g. 0.2@300, got {text!r}") from None
     try:
@@ -201,8 +201,11 @@ def events_from_values(values: Any, where: str) -> tuple[FaultEvent, ...]:
 
 
 def _split(text: str, option: str, form: str) -> tuple[str, int]:
+    """`text`'s part before its last @, and the step after it. A step is decimal digits, the
+    ones int() reads (str.isdigit also takes superscripts and circled digits, which it does
+    not)."""
     head, at, step = text.rpartition("@")
-    if not at or not step.strip().isdigit() or not head:
+    if not at or not step.strip().isdecimal() or not head:
         raise FaultError(f"{option} expects {form}, got {text!r}")
     return head, int(step)
 
