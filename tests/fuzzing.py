@@ -562,8 +562,8 @@ INTERESTING = [0, 1, -1, 2, 3, 90, 45, 4095, 4096, 1_000_001, 2**31, 2**63 - 1, 
                float("nan"), True, False, "", "x", "0", "optimal", "paper", "mine.py:Mine",
                "shape.png", "sub/dot.png", "scenario.toml", "../shape.png", "/dev/null", "sub",
                ".", "é", "a" * 300, "#zzz", "red", "rgb(999,999,999)", "hsl(999, 999%, 999%)",
-               "a,b", 'a"b', "a\nb", "$x$", [], [1], [1, 2], [1, 2, 3], ["a"], [[1, 2]], {},
-               {"x": 1}]  # fmt: skip
+               "a,b", 'a"b', "a\nb", "$x$", "shape\x00.png", [], [1], [1, 2], [1, 2, 3], ["a"],
+               [[1, 2]], {}, {"x": 1}]  # fmt: skip
 """Values a mutation puts where another was: other types, edges, out of range."""
 
 

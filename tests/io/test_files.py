@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from swarmshape.cli import main
+from swarmshape.errors import InputError
 from swarmshape.io import files
 from swarmshape.io.files import OutputError, atomic_write, check_output
 from tests.conftest import SHAPES
@@ -328,3 +329,20 @@ def test_a_terminated_run_leaves_no_temporary_file(tmp_path, signal_number):
     _, err = process.communicate(timeout=60)
     assert process.returncode == 128 + signal_number, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_nul_byte_in_an_input_name_is_one_line(tmp_path, capsys):
+    """Issue 29, case 12: a scenario's or a sweep's shape path with a NUL byte in it (TOML
+    allows "\\u0000") was a traceback: os.stat raises ValueError for such a name."""
+    with pytest.raises(InputError, match="its name holds a NUL byte"):
+        files.readable_file(Path("a\0b.png"), "an image")
+    (tmp_path / "nul.toml").write_text('[[groups]]\nshape = "li\\u0000ne.png"\n')
+    (tmp_path / "nul-sweep.toml").write_text(
+        'shapes = ["li\\u0000ne.png"]\nstrategies = ["optimal"]\n'
+    )
+    for argv in (
+        [str(tmp_path / "nul.toml"), "--headless"],
+        ["sweep", str(tmp_path / "nul-sweep.toml")],
+    ):
+        assert main(argv) == 2
+        assert "li\\x00ne.png: no such file (its name holds a NUL byte)" in capsys.readouterr().err

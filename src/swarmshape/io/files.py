@@ -133,6 +133,8 @@ def readable_file(path: Path, expected: str, error: type[InputError] = InputErro
         raise error(f"{path}: no such file") from None
     except OSError as failure:
         raise error(f"{path}: cannot read it ({failure.strerror})") from None
+    except ValueError:  # no file name may hold a NUL byte
+        raise error(f"{path}: no such file (its name holds a NUL byte)") from None
     if stat.S_ISDIR(mode):
         raise error(f"{path}: is a directory, expected {expected}")
     if not stat.S_ISREG(mode):
