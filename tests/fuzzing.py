@@ -30,6 +30,7 @@ import sys
 import tempfile
 import threading
 import time
+import zipfile
 import zlib
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -956,7 +957,7 @@ def mutated_state(pick: Pick, path: Path) -> bytes:
         return mutate_bytes(pick, path.read_bytes())
     manifest, arrays = state_members(path)
     how = pick.choice(["value", "value", "array", "array", "array", "drop", "extra", "head",
-                       "deep"])  # fmt: skip
+                       "deep", "raw"])  # fmt: skip
     values = manifest["values"]
     if how == "value":
         key = pick.choice(sorted(values))
@@ -974,9 +975,23 @@ def mutated_state(pick: Pick, path: Path) -> bytes:
         arrays[pick.choice(["swarm.extra", "manifest.npy", "swarm.cell.x"])] = np.zeros(3)
     elif how == "head":
         manifest[pick.choice(["format", "version", "values"])] = pick.choice(INTERESTING)
-    else:
+    elif how == "deep":
         values[pick.choice(sorted(values))] = json.loads("[" * 50 + "]" * 50)
-    return state_bytes(manifest, arrays, compressed=pick.integer(0, 1) == 1, deep=how == "deep")
+    data = state_bytes(manifest, arrays, compressed=pick.integer(0, 1) == 1, deep=how == "deep")
+    return raw_member(data, pick.choice(["manifest", *sorted(arrays)])) if how == "raw" else data
+
+
+def raw_member(data: bytes, name: str) -> bytes:
+    """A state file with the member `name` stored as plain bytes (its JSON), not as a .npy."""
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        members = {info.filename: archive.read(info) for info in archive.infolist()}
+    manifest = members["manifest.npy"]
+    members[f"{name}.npy"] = manifest[manifest.index(b"{") :]
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w") as archive:
+        for member, content in members.items():
+            archive.writestr(member, content)
+    return out.getvalue()
 
 
 # --- the kinds of case -------------------------------------------------------------------------

@@ -242,3 +242,18 @@ def test_a_damaged_array_header_is_a_damaged_state(tmp_path, edit):
     with_array_header(path, edit)
     with pytest.raises(InputError, match="damaged state file"):
         load_state(path)
+
+
+@pytest.mark.parametrize("member", ["manifest.npy", "swarm.cell.npy"])
+def test_a_member_of_raw_bytes_is_a_damaged_state(tmp_path, member):
+    """Issue 29, case 12: a member that is not a .npy array (numpy hands it over as bytes) was
+    an AttributeError when it was the manifest."""
+    path, _ = saved_state(tmp_path)
+    with zipfile.ZipFile(path) as archive:
+        members = {info.filename: archive.read(info) for info in archive.infolist()}
+    members[member] = members["manifest.npy"][members["manifest.npy"].index(b"{") :]
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    with pytest.raises(InputError, match="damaged state file"):
+        load_state(path)

@@ -78,6 +78,8 @@ def load_state(path: Path) -> dict[str, Any]:
     try:
         with np.load(path, allow_pickle=False) as archive:
             members = {name: archive[name] for name in archive.files}
+        if not all(isinstance(member, np.ndarray) for member in members.values()):
+            raise ValueError("a member that is not an array")  # numpy hands those over as bytes
         text = members.pop(MANIFEST).tobytes().decode("utf-8")
         manifest = json.loads(text, parse_float=_finite, parse_constant=_finite)
     except (ValueError, OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeError,
