@@ -48,6 +48,8 @@ PROGRESS = re.compile(r"^swarmshape: (step \d+, coverage .*|\d+/\d+ runs)$")
 """The progress lines a run or a sweep writes off a terminal every 10 s (a slow machine)."""
 STOPPED = (128 + signal.SIGTERM, -signal.SIGTERM)
 """How a process sent SIGTERM may end: having cleaned up, or at once (before a run began)."""
+OVERLAPS = re.compile(r", ([\d,]+) overlaps?, seed")
+"""Where a summary line says how many overlaps the run had: always 0, or something lied."""
 TIMEOUT = 120
 """Seconds a case may take before it counts as hung."""
 
@@ -168,7 +170,7 @@ INPUTS = {
     "sweep": ["sweep.toml"],
     "start": ["start.csv"],
     "results": ["results.csv"],
-    "state": ["paper.state", "optimal.state"],
+    "state": ["paper.state", "optimal.state", "faults.state"],
 }
 """The valid inputs of each kind in the material folder."""
 OTHERS = ["notes.txt", "data.npz", "mine.py", "sub", "."]
@@ -177,6 +179,7 @@ OTHERS = ["notes.txt", "data.npz", "mine.py", "sub", "."]
 def make_material(folder: Path) -> Path:
     """Write the valid inputs (see `INPUTS`) into `folder`, with swarmshape itself."""
     from swarmshape.config import configure
+    from swarmshape.core.faults import FaultEvent
     from swarmshape.experiments.results import open_results
     from swarmshape.experiments.sweep import read_sweep, run_key, run_one
     from swarmshape.runs import build, load_world, run, save
@@ -200,6 +203,9 @@ def make_material(folder: Path) -> Path:
     for strategy in ("paper", "optimal"):
         config = configure(folder / "shape.png", strategy=strategy, seed=1)
         save(run(build(config), max_steps=6), folder / f"{strategy}.state", config)
+    faults = (FaultEvent(2, "remove", 0.2), FaultEvent(3, "stall", 2))  # a log, lost, stalled
+    config = configure(folder / "shape.png", strategy="greedy", seed=1, faults=faults)
+    save(run(build(config), max_steps=9), folder / "faults.state", config)
     runs = list(read_sweep(folder / "sweep.toml"))
     settings = [f"config.{name}" for name in sorted(runs[0])]
     with open_results(folder / "results.csv", settings) as results:
@@ -1572,6 +1578,9 @@ def problems(
         said = "formed in" if status == 0 else "not formed after"
         if said not in outcome.stdout:
             found.append(f"exit status {status} without '{said}' in the summary")
+        overlaps = OVERLAPS.search(outcome.stdout)
+        if overlaps and overlaps[1] != "0":
+            found.append(f"reported {overlaps[1]} overlaps, which no run has")
         bad = named.unreadable()
         if bad:
             found.append(f"wrote an output that does not read back: {bad}")

@@ -15,12 +15,14 @@ import pytest
 
 from swarmshape.cli import main
 from swarmshape.config import configure
+from swarmshape.core.faults import LOG_KEYS
 from swarmshape.core.metrics import run_metrics
 from swarmshape.errors import InputError
 from swarmshape.io.checkpoint import PICKLE_HEADER, load_state
 from swarmshape.runs import build, resume, run, save
 from swarmshape.strategies import available
 from tests.conftest import SHAPES
+from tests.fuzzing import changed_state, state_members
 
 
 def config_for(strategy: str):
@@ -257,3 +259,47 @@ def test_a_member_of_raw_bytes_is_a_damaged_state(tmp_path, member):
             archive.writestr(name, data)
     with pytest.raises(InputError, match="damaged state file"):
         load_state(path)
+
+
+CRAFTED = {
+    "overlaps counted": (lambda m: {"swarm.overlap_total": 136}, "overlap_total is 136"),
+    "a step beyond any count": (lambda m: {"swarm.step": 10**100}, "swarm.step is 1000"),
+    "completed after the step": (lambda m: {"swarm.completed_at": [10**6]}, "completed_at holds"),
+    "plans of another length": (
+        lambda m: {"swarm.driver.strategy._planned": np.zeros(3, dtype=np.int64)},
+        "_planned does not hold one whole number per robot",
+    ),
+    "plans past the targets": (
+        lambda m: {"swarm.driver.strategy._planned": m["swarm.driver.strategy._planned"] + 10**6},
+        "_planned names a target that does not exist",
+    ),
+    "movers without targets": (
+        lambda m: {"swarm.driver.target": np.full_like(m["swarm.driver.target"], -1)},
+        "target disagrees with the robots' states",
+    ),
+    "targets filled by nobody": (
+        lambda m: {"swarm.filled": np.ones_like(m["swarm.filled"])},
+        "filled marks a target that no settled robot rests on",
+    ),
+    "a fault log of words": (
+        lambda m: {"swarm.faults.log": [dict.fromkeys(LOG_KEYS, "x")]},
+        "log is not a list of fault entries",
+    ),
+    "robots lost that are there": (
+        lambda m: {"swarm.faults.lost_at": np.zeros_like(m["swarm.faults.lost_at"])},
+        "lost_at disagrees with which robots are lost",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CRAFTED))
+def test_a_crafted_value_out_of_range_is_refused_before_the_first_step(tmp_path, name):
+    """Issue 29, case 12: a state whose values were out of range, with a checksum made to
+    match, crashed at the first step or reported "formed ... 136 overlaps" and "formed in
+    10^100 steps" (exit 0). Every value is now checked against the rest on load."""
+    path, _ = saved_state(tmp_path)
+    _, members = state_members(path)
+    change, message = CRAFTED[name]
+    path.write_bytes(changed_state(path, change(members)))
+    with pytest.raises(InputError, match=re.escape(message)):
+        resume(path)

@@ -239,12 +239,25 @@ class Steering:
         return values | prefixed("strategy", self.strategy.snapshot())
 
     def restore(self, saved: Snapshot) -> None:
-        n, m = len(self.target), len(self.swarm.world.targets)
+        swarm, n, m = self.swarm, len(self.target), len(self.swarm.world.targets)
         self.target = saved.array("target", np.int64, (n,), -1, m - 1)
+        heading = self.target >= 0
+        # movers and settled robots have targets, of their own group; settled ones rest on theirs
+        goes = (swarm.state == MOVING) | (swarm.state == SETTLED)
+        mine = swarm.world.target_group[np.maximum(self.target, 0)] == swarm.group
+        settled = np.flatnonzero(swarm.state == SETTLED)
+        resting = swarm.cell[settled] == swarm.world.targets[self.target[settled]]
+        if (heading != goes).any() or not mine[heading].all() or not resting.all():
+            raise saved.error("target", "disagrees with the robots' states, groups and cells")
         self.blocked = saved.array("blocked", np.int64, (n,), 0)
         self.routed = saved.array("routed", bool, (n,))
         self.recruited = saved.array("recruited", bool, (n,))
         self.queue = MessageQueue.restored(saved.part("queue"), n, m)
+        pending = self.queue.pending
+        recipients = np.array([message.recipient for message in pending], dtype=np.int64)
+        targets = np.array([message.target for message in pending], dtype=np.int64)
+        if (swarm.world.target_group[targets] != swarm.group[recipients]).any():
+            raise saved.error("queue.pending", "sends a robot to another group's target")
         self.planner.restore(saved.part("planner"))
         self.strategy.restore(saved.part("strategy"), self.view)
 

@@ -33,6 +33,8 @@ if TYPE_CHECKING:
     from swarmshape.core.plugin import Plugin
     from swarmshape.core.shape import Pose, Shape
 
+MAX_STEP = 2**62
+"""The most steps a run can count (its step numbers go into int64 arrays)."""
 FOLLOW_PASSES = 64
 """Passes that let a train of robots following each other start and stop as one (each pass
 frees one more link; a longer train moves with a short ripple)."""
@@ -237,19 +239,24 @@ class Swarm:
         swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
         swarm._restore_arrays(saved)
         swarm._restore_rng(saved)
-        swarm.step_count = saved.integer("step", 0)
-        swarm.overlap_total = saved.integer("overlap_total", 0)
+        swarm.step_count = saved.integer("step", 0, MAX_STEP)
+        # a run never has overlapping robots: counted ones mean a crafted or damaged state
+        swarm.overlap_total = saved.integer("overlap_total", 0, 0)
         completed = saved.value("completed_at")
         if not isinstance(completed, list) or len(completed) != len(world.groups):
             raise saved.error("completed_at", "does not have one entry per group")
-        if not all(step is None or type(step) is int for step in completed):
-            raise saved.error("completed_at", "holds something other than steps")
+        if not all(at is None or (type(at) is int and 0 <= at <= swarm.step_count)
+                   for at in completed):  # fmt: skip
+            raise saved.error("completed_at", "holds something other than steps of the run")
         swarm.completed_at = completed
-        swarm.faults = Faults.restored(saved.part("faults"), world.agents)
+        swarm.faults = Faults.restored(saved.part("faults"), world.agents, swarm.step_count)
+        if not np.array_equal(swarm.faults.lost_at >= 0, swarm.state == LOST):
+            raise saved.error("faults.lost_at", "disagrees with which robots are lost")
         with swarm._code.running(" while the run was resumed"):
             swarm.driver = plugin.drive(swarm)
             swarm._index_world()
-            swarm.dead = saved.array("dead", bool, (len(world.targets),))
+            if not np.array_equal(saved.array("dead", bool, (len(world.targets),)), swarm.dead):
+                raise saved.error("dead", "disagrees with where the stalled robots are")
             swarm.driver.restore(saved.part("driver"))
         return swarm
 
@@ -265,7 +272,7 @@ class Swarm:
         self.distance = saved.array("distance", np.float64, (n,), 0)
         self.state = saved.array("state", np.int8, (n,), 0, len(State) - 1)
         self.filled = saved.array("filled", bool, (len(self.world.targets),))
-        self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0)
+        self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0, 0)
         self.leader = saved.array("leader", np.int64, (n,), -1, n - 1)
         self.pace = saved.array("pace", np.float64, (n,), 0.1, 1)
         self.lattice = Lattice(self.world.size)
@@ -294,6 +301,10 @@ class Swarm:
             raise saved.error("holder", "disagrees with where the robots and seeds are")
         self.lattice.holder[:] = holder
         self.lattice.queued[:] = queued
+        filled = self.world.targets[self.filled]
+        resting = self.lattice.grid[filled[:, 0], filled[:, 1]]
+        if ((resting < 0) | (self.state[np.maximum(resting, 0)] != SETTLED)).any():
+            raise saved.error("filled", "marks a target that no settled robot rests on")
 
     def _restore_rng(self, saved: Snapshot) -> None:
         try:
