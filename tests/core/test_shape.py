@@ -117,3 +117,14 @@ def test_a_solid_shape_stays_solid_when_fitted_to_fewer_robots():
     for agents in range(1, shape.count):  # shrunk to 5 cells across, a plain resample is not
         fitted = shape.fitted(agents)
         assert fitted.is_solid and fitted.count <= agents
+
+
+@pytest.mark.parametrize("x", [10**20, -(10**20), 2**63, 25_000_001])
+def test_a_pose_beyond_any_arena_is_refused(x):
+    """Issue 29, case 12: a scenario pose beyond int64 made object arrays, was accepted, and
+    the automatic arena then shifted it away (ignored without a word)."""
+    with pytest.raises(ShapeError, match="lies beyond any arena"):
+        Pose(x, 0)
+    with pytest.raises(ShapeError, match="lies beyond any arena"):
+        Pose(0, x, 90)
+    assert Pose(25_000_000, -25_000_000).x == 25_000_000

@@ -24,6 +24,10 @@ SEED_SIDES = np.array(
 """The frame cells that share a side with a seed (and are not one)."""
 
 
+MAX_ARENA_CELLS = 25_000_000
+"""The largest arena, in cells (a cap that keeps memory bounded; no side is longer)."""
+
+
 class ShapeError(InputError):
     """A shape or pose that cannot be used; the message says why."""
 
@@ -39,6 +43,11 @@ class Pose:
     def __post_init__(self) -> None:
         if self.rotation % 90:
             raise ShapeError(f"rotation must be a multiple of 90 degrees, got {self.rotation}")
+        if max(abs(self.x), abs(self.y)) > MAX_ARENA_CELLS:  # and so fits int64 arithmetic
+            raise ShapeError(
+                f"pose ({self.x}, {self.y}) lies beyond any arena (no side is longer than "
+                f"{MAX_ARENA_CELLS:,} cells)"
+            )
 
     def to_world(self, frame_cells: np.ndarray) -> np.ndarray:
         """Map integer frame cells to world cells (the unit squares rotate about the origin)."""

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.core.shape import MAX_ARENA_CELLS, SEED_CELLS, Pose, Shape
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.errors import InputError
 
@@ -34,8 +34,8 @@ the side away from its shape (as in the Kilobot self-assembly experiments); ``sc
 random free cells (the default)."""
 
 MAX_AGENTS = 1_000_000
-MAX_ARENA_CELLS = 25_000_000
-"""Caps that keep memory bounded (a million agents need about a gigabyte all told)."""
+"""A cap that keeps memory bounded (a million agents need about a gigabyte all told); the
+arena's is `MAX_ARENA_CELLS`."""
 
 
 class WorldError(InputError):
