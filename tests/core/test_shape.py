@@ -128,3 +128,14 @@ def test_a_pose_beyond_any_arena_is_refused(x):
     with pytest.raises(ShapeError, match="lies beyond any arena"):
         Pose(0, x, 90)
     assert Pose(25_000_000, -25_000_000).x == 25_000_000
+
+
+def test_a_shape_without_cells_is_refused_wherever_a_world_is_made():
+    """Issue 29, case 12: an all-empty grid with agents=1 built a world, and the first step
+    (vector_env's reset) raised an IndexError."""
+    empty = Shape(np.zeros((3, 3), dtype=bool))
+    with pytest.raises(WorldError, match="group 'g': its shape has no cells"):
+        build_world([GroupSpec("g", empty, (1, 2, 3), 1)])
+    world = build_world([GroupSpec("g", Shape(grid_from("##")), (1, 2, 3))])
+    with pytest.raises(WorldError, match="its shape has no cells"):
+        world.reshaped(0, empty, world.groups[0].pose)

@@ -367,3 +367,10 @@ def test_the_reward_follows_a_shape_a_fault_re_formed_smaller():
     swarm.fail(np.arange(5))  # too few left: the shape is re-formed with fewer cells
     assert len(swarm.world.targets) < 9
     assert reward(swarm).shape == (9,)
+
+
+@pytest.mark.parametrize("make", [learn.vector_env, learn.parallel_env])
+def test_an_empty_grid_is_one_clear_error_not_an_index_error(make):
+    """Issue 29, case 12: an all-empty grid with agents=1 raised an IndexError at reset."""
+    with pytest.raises(InputError, match="its shape has no cells"):
+        make(np.zeros((3, 3), dtype=bool), agents=1).reset(seed=0)

@@ -199,7 +199,7 @@ def blank_world(
     """An arena with one group's seeds and no shape yet: the editor's empty canvas."""
     group = Group.placed(name, colour, Shape(np.zeros((0, 0), dtype=bool)), pose, 0)
     world = World(size, (group,), name)
-    _validate(world, starts=False)
+    _validate(world, starts=False, blank=True)
     return world
 
 
@@ -286,7 +286,10 @@ def _auto_arena(groups: list[Group], packed: bool = False) -> tuple[list[Group],
     return moved, (int(width), int(height))
 
 
-def _validate(world: World, *, starts: bool = True) -> None:
+def _validate(world: World, *, starts: bool = True, blank: bool = False) -> None:
+    """Refuse a world that cannot run: an arena too small or too large, a group off it or with
+    no cell to form (unless `blank`: the editor's canvas), overlapping groups, and (with
+    `starts`) too little room to start the robots."""
     width, height = world.size
     if width < 1 or height < 1:
         raise WorldError(f"arena must be at least 1x1 cells, got {width}x{height}")
@@ -295,6 +298,8 @@ def _validate(world: World, *, starts: bool = True) -> None:
             f"arena {width}x{height} is larger than {MAX_ARENA_CELLS:,} cells; make it smaller"
         )
     for group in world.groups:
+        if not blank and not len(group.targets):
+            raise WorldError(f"group {group.name!r}: its shape has no cells; draw at least one")
         cells = np.concatenate([group.targets, group.seeds])
         if (cells < 0).any() or (cells >= np.array(world.size)).any():
             raise WorldError(
