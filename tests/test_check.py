@@ -89,6 +89,13 @@ class WritesItsView(Optimal):
         swarm.cells[0] = 5
 
 
+class WritesItsWorld(Optimal):
+    name = "writes-its-world"
+
+    def on_step(self, swarm):
+        swarm.world.seeds[:] = 0
+
+
 class NamesNobody(Optimal):
     name = "names-nobody"
 
@@ -129,6 +136,8 @@ FAILURES = [
     ("Raises", "strategy 'raises' failed at step 3: ValueError: my bug (test_check.py, line"),
     ("WritesItsView", "strategy 'writes-its-view' failed as the run started: ValueError: "
      "assignment destination is read-only (test_check.py, line"),
+    ("WritesItsWorld", "strategy 'writes-its-world' failed as the run started: ValueError: "
+     "assignment destination is read-only (test_check.py, line"),
     ("NamesNobody", "strategy 'names-nobody' failed as the run started: IndexError: assign: there "
      "is no robot 1000000 (they are 0 to"),
     ("NamesAnotherGroupsTarget", "failed as the run started: ValueError: send: target 71 belongs "
@@ -149,7 +158,7 @@ def test_a_failure_of_a_strategys_own_code_is_one_line_naming_it(capsys, name, m
     assert message in err[0], err[0]
 
 
-@pytest.mark.parametrize(("name", "message"), FAILURES[:1] + FAILURES[4:], ids=["raises", "exits"])
+@pytest.mark.parametrize(("name", "message"), FAILURES[:1] + FAILURES[-1:], ids=["raises", "exits"])
 def test_check_reports_a_strategys_failure_in_plain_words(capsys, name, message):
     assert main(["check", f"tests.test_check:{name}", "--runs", "3"]) == 3
     out = capsys.readouterr().out.splitlines()

@@ -139,3 +139,19 @@ def test_a_shape_without_cells_is_refused_wherever_a_world_is_made():
     world = build_world([GroupSpec("g", Shape(grid_from("##")), (1, 2, 3))])
     with pytest.raises(WorldError, match="its shape has no cells"):
         world.reshaped(0, empty, world.groups[0].pose)
+
+
+def test_a_world_and_its_shapes_are_read_only():
+    """Issue 29, case 15: a strategy wrote `swarm.targets[0] = ...` and
+    `swarm.world.seeds[:] = 0` through its SwarmView, and the run reported 1,800 overlaps; the
+    README says the view is read-only. The world's arrays are read-only where they are made."""
+    grid = grid_from("##\n#.")
+    world = build_world([GroupSpec("g", Shape(grid), (1, 2, 3))])
+    group = world.groups[0]
+    arrays = [world.targets, world.target_group, world.seeds, group.targets, group.seeds,
+              group.frame_cells, group.shape.grid]  # fmt: skip
+    for array in arrays:
+        with pytest.raises(ValueError, match="read-only"):
+            array[0] = 1
+    grid[0, 1] = False  # the shape kept its own copy
+    assert group.shape.grid[0, 1]

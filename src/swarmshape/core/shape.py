@@ -28,6 +28,13 @@ MAX_ARENA_CELLS = 25_000_000
 """The largest arena, in cells (a cap that keeps memory bounded; no side is longer)."""
 
 
+def frozen(array: np.ndarray) -> np.ndarray:
+    """`array`, made read-only (an array of a shape or a world is never written after it is
+    made)."""
+    array.flags.writeable = False
+    return array
+
+
 class ShapeError(InputError):
     """A shape or pose that cannot be used; the message says why."""
 
@@ -74,6 +81,11 @@ class Shape:
     grid: np.ndarray
     scale: float = 1.0
     origin: tuple[int, int] = (0, 0)
+
+    def __post_init__(self) -> None:
+        # its own read-only copy: a shape is a value, which neither its maker nor a plug-in
+        # that is shown it can change under a running swarm
+        object.__setattr__(self, "grid", frozen(np.array(self.grid, dtype=bool)))
 
     @classmethod
     def from_cells(cls, cells: np.ndarray) -> Shape:

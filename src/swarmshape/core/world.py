@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from swarmshape.core.shape import MAX_ARENA_CELLS, SEED_CELLS, Pose, Shape
+from swarmshape.core.shape import MAX_ARENA_CELLS, SEED_CELLS, Pose, Shape, frozen
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.errors import InputError
 
@@ -66,6 +66,10 @@ class Group:
     targets: np.ndarray
     seeds: np.ndarray
 
+    def __post_init__(self) -> None:
+        for array in (self.frame_cells, self.targets, self.seeds):
+            frozen(array)
+
     def packed(self) -> np.ndarray:
         """World cells ``(agents, 2)`` of a block of this group's robots packed against its
         seeds: a near-square block above the seed L in the seed frame (rows ``y <= -2``, its
@@ -105,10 +109,11 @@ class World:
     seeds: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "targets", np.concatenate([g.targets for g in self.groups]))
+        targets = np.concatenate([g.targets for g in self.groups])
         sizes = [len(g.targets) for g in self.groups]
-        object.__setattr__(self, "target_group", np.repeat(np.arange(len(sizes)), sizes))
-        object.__setattr__(self, "seeds", np.concatenate([g.seeds for g in self.groups]))
+        object.__setattr__(self, "targets", frozen(targets))
+        object.__setattr__(self, "target_group", frozen(np.repeat(np.arange(len(sizes)), sizes)))
+        object.__setattr__(self, "seeds", frozen(np.concatenate([g.seeds for g in self.groups])))
 
     @property
     def agents(self) -> int:
