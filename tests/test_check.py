@@ -200,3 +200,61 @@ def test_a_bug_of_ours_under_a_users_strategy_stays_ours(monkeypatch, capsys):
     argv = [str(SHAPES / "line.png"), "--headless", "--strategy", "tests.test_check:Plain"]
     assert main(argv) == 1
     assert "internal error, please report it" in capsys.readouterr().err
+
+
+class Plans(Optimal):
+    """Keeps what any planner keeps, set up in on_start: a list of numpy integers, a count."""
+
+    name = "plans"
+
+    def on_start(self, swarm):
+        self.order = list(np.argsort(swarm.targets[:, 0]))
+        self.steps = 0
+        super().on_start(swarm)
+
+    def on_step(self, swarm):
+        self.steps += 1
+        assert len(self.order) == len(swarm.targets)
+        super().on_step(swarm)
+
+
+class KeepsATable(Plans):
+    name = "keeps-a-table"
+
+    def on_start(self, swarm):
+        self.table = {"a": 1}
+        super().on_start(swarm)
+
+
+def test_what_a_strategy_sets_up_in_on_start_is_saved_and_resumed(tmp_path, capsys):
+    """Issue 29, case 16: a strategy that kept state set in on_start saved, passed check, and
+    crashed on --load-state (the attribute did not exist after __init__); a list of numpy
+    integers was refused as "not numbers", and only after the whole run."""
+    common = [str(SHAPES / "line.png"), "--headless", "--seed", "4", "--strategy",
+              "tests.test_check:Plans"]  # fmt: skip
+    assert main([*common, "--metrics", str(tmp_path / "whole.json")]) == 0
+    assert main([*common, "--max-steps", "6", "--save-state", str(tmp_path / "s.state")]) == 3
+    resumed = ["--load-state", str(tmp_path / "s.state"), "--headless", "--strategy",
+               "tests.test_check:Plans", "--metrics", str(tmp_path / "resumed.json")]  # fmt: skip
+    assert main(resumed) == 0
+    assert (tmp_path / "whole.json").read_text() == (tmp_path / "resumed.json").read_text()
+    assert check_strategy(Plans, runs=2).clean
+
+
+def test_a_strategy_that_keeps_what_a_state_cannot_hold_is_told_before_the_run(tmp_path, capsys):
+    argv = [str(SHAPES / "line.png"), "--headless", "--strategy", "tests.test_check:KeepsATable",
+            "--save-state", str(tmp_path / "s.state")]  # fmt: skip
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and list(tmp_path.iterdir()) == []
+    assert captured.err == (
+        f"swarmshape: error: {tmp_path / 's.state'}: --save-state cannot save this run: strategy "
+        "'keeps-a-table' keeps a dict in self.table, which a state file cannot hold: keep numbers, "
+        "text and numpy arrays (or lists of them), or define snapshot() and restore()\n"
+    )
+    report = check_strategy(KeepsATable, runs=2)
+    assert report.problems[0].endswith(
+        "step 5: the run could not be saved and resumed: strategy 'keeps-a-table' keeps a dict "
+        "in self.table, which a state file cannot hold: keep numbers, text and numpy arrays (or "
+        "lists of them), or define snapshot() and restore()"
+    )

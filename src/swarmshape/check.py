@@ -4,7 +4,9 @@ broke: ``check_strategy("optimal")`` or ``swarmshape check my_strategies.py:Mine
 Each random shape is run twice with the same seed. At every step the robots' squares must not
 overlap (seeds included), stay in the arena, keep their number (robots are conserved except
 those a fault removed), and settled robots must stay where they are; the two runs must be
-identical step by step (randomness from anywhere but ``swarm.rng`` shows up here); and the
+identical step by step (randomness from anywhere but ``swarm.rng`` shows up here; the second
+is saved to a state file and resumed at step `RESUME_AT`, so a strategy whose state does not
+survive that shows up too); and the
 shape must form within the step limit and stay formed for `AFTER_FORMED` steps more (unless a
 fault opened it again). A failure of the strategy's own code (an exception, a write to its
 read-only view, a robot that does not exist, ``sys.exit``) and a step that takes over
@@ -14,11 +16,14 @@ read-only view, a robot that does not exist, ``sys.exit``) and a step that takes
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import signal
+import tempfile
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
@@ -27,11 +32,13 @@ from swarmshape import strategies
 from swarmshape.core.audit import overlapping_pairs
 from swarmshape.core.guard import PluginCode
 from swarmshape.core.shape import Shape
+from swarmshape.core.snapshot import Snapshot, SnapshotError
 from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import PluginError, Stopped
+from swarmshape.io.checkpoint import load_state, save_state
 from swarmshape.runs import Observer, Runner
 
 T = TypeVar("T")
@@ -42,6 +49,11 @@ STEP_SECONDS = 10.0
 """How long one step may take. The check's shapes have a few dozen robots, and the built-in
 strategies step them in a millisecond or two on a busy machine: a strategy that takes this long
 is caught in a loop."""
+
+
+RESUME_AT = 5
+"""The step at which the second run of each shape is saved and resumed (its strategy has set
+up whatever it keeps in ``on_start`` by then, and most of the run is still to come)."""
 
 
 class StepTooLong(Stopped):
@@ -64,9 +76,13 @@ class InvariantWatch(Observer):
         self._dead: np.ndarray | None = None
         self.failed = False
         """The run stopped short (see `fail`)."""
+        self._step = -1
 
     def capture(self, swarm: Swarm) -> None:
         step = swarm.step_count
+        if step == self._step:  # seen already (a resumed run is shown again)
+            return
+        self._step = step
         present = swarm.present
         pos = swarm.positions()[present]
         width, height = swarm.world.size
@@ -166,8 +182,8 @@ def check_strategy(
             f"shape {index} ({len(world.targets)} cells, {world.agents} robots, seed {run_seed})"
         )
         watches = []
-        for _ in "ab":
-            watches.append(watch_run(world, cls, run_seed, max_steps, step_seconds))
+        for resume_at in (None, RESUME_AT):
+            watches.append(watch_run(world, cls, run_seed, max_steps, step_seconds, resume_at))
             if watches[-1].failed:
                 report.problems += [f"{where}: {problem}" for problem in watches[-1].problems]
                 return report
@@ -186,9 +202,11 @@ def watch_run(
     seed: int,
     max_steps: int,
     step_seconds: float = STEP_SECONDS,
+    resume_at: int | None = None,
 ) -> InvariantWatch:
     """Run one strategy on `world` to the end under an `InvariantWatch`, each step (and the
-    making of the swarm) within `step_seconds`."""
+    making of the swarm) within `step_seconds`, saved to a file and resumed after step
+    `resume_at` if given."""
     watch = InvariantWatch()
     runner: Runner | None = None
     try:
@@ -199,6 +217,10 @@ def watch_run(
             runner = Runner(swarm, [watch], max_steps)
             while not runner.finished:
                 limited(runner.step)
+                if runner.swarm.step_count == resume_at:
+                    resumed = limited(functools.partial(saved_and_resumed, runner.swarm, cls))
+                    runner = Runner(resumed, [watch], max_steps)
+            swarm = runner.swarm
             runner.close()
             if not swarm.complete:
                 coverage = swarm.filled.mean()
@@ -209,6 +231,8 @@ def watch_run(
                 limited(runner.step)
     except PluginError as error:
         watch.fail(str(error))
+    except SnapshotError as error:
+        watch.fail(f"step {resume_at}: the run could not be saved and resumed: {error}")
     except StepTooLong:
         step = "its start" if runner is None else f"step {runner.swarm.step_count}"
         watch.fail(
@@ -216,6 +240,15 @@ def watch_run(
             "check stopped it"
         )
     return watch
+
+
+def saved_and_resumed(swarm: Swarm, cls: type[Strategy]) -> Swarm:
+    """`swarm` written to a state file and read back, by a fresh plug-in of `cls`."""
+    with tempfile.TemporaryDirectory(prefix="swarmshape-check-") as folder:
+        path = Path(folder) / "check.state"
+        save_state(path, swarm.snapshot())
+        saved = Snapshot(load_state(path))
+    return Swarm.restored(saved, strategies.create(cls))
 
 
 @contextlib.contextmanager

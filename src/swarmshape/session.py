@@ -25,9 +25,10 @@ from swarmshape.config import RunConfig
 from swarmshape.core.guard import PluginCode
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
+from swarmshape.core.snapshot import SnapshotError
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, blank_world
-from swarmshape.errors import Terminated
+from swarmshape.errors import InputError, Terminated
 from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
@@ -132,6 +133,7 @@ class Session:
                 swarm = self._show(config, world, make_swarm, observers)
             else:
                 swarm = make_swarm(world)
+                self._can_save(swarm)
                 say(opening_line(swarm, config))
                 runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
                 runner.finish()
@@ -145,6 +147,18 @@ class Session:
                 write_text(self.outputs.metrics, text)
         say(summary_line(metrics))
         return metrics
+
+    def _can_save(self, swarm: Swarm) -> None:
+        """With --save-state: refuse now, not after the run, a strategy that keeps what a state
+        file cannot hold (it has set its attributes in `on_start` by now)."""
+        if self.outputs.save_state is None:
+            return
+        try:
+            swarm.snapshot()
+        except SnapshotError as error:
+            raise InputError(
+                f"{self.outputs.save_state}: --save-state cannot save this run: {error}"
+            ) from None
 
     def _loading(self) -> contextlib.AbstractContextManager[None]:
         """A failure of a strategy's own code (``file.py:Class``) as it is loaded and made is
