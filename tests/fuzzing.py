@@ -151,6 +151,22 @@ class Exits(Optimal):
         sys.exit(swarm.step)
 
 
+class Plans(Optimal):
+    name = "plans"
+
+    def on_start(self, swarm):
+        self.order = list(np.argsort(swarm.targets[:, 0]))
+        super().on_start(swarm)
+
+
+class Keeps(Optimal):
+    name = "keeps"
+
+    def on_start(self, swarm):
+        self.table = {"cells": 1}
+        super().on_start(swarm)
+
+
 class Loops(Optimal):
     name = "loops"
 
@@ -160,9 +176,11 @@ class Loops(Optimal):
         super().on_step(swarm)
 """
 """Strategies whose own code fails every way a user's might (issue 29): each must be one line
-naming it (exit 2), or a problem `check` reports (exit 3); `check` stops the loop."""
+naming it (exit 2), or a problem `check` reports (exit 3); `check` stops the loop. And two that
+keep state set up in on_start: one a state file holds, one it cannot."""
 HOSTILE_CLASSES = ["hostile.py:Raises", "hostile.py:Writes", "hostile.py:Nobody",
-                   "hostile.py:Exits", "broken.py:X"]  # fmt: skip
+                   "hostile.py:Exits", "hostile.py:Plans", "hostile.py:Keeps",
+                   "broken.py:X"]  # fmt: skip
 
 INPUTS = {
     "image": ["shape.png", "sub/dot.png"],
