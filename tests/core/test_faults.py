@@ -372,3 +372,16 @@ def test_survivors_that_stand_only_on_another_groups_shape_end_the_run_stranded(
     Runner(swarm, max_steps=3000).finish()
     assert swarm.stranded and not swarm.complete and swarm.step_count < 3000
     assert swarm.completed_at[1] is not None and (swarm.state == SETTLED).sum() == 4
+
+
+def test_a_wanderer_left_in_a_hole_of_the_re_formed_shape_takes_the_papers_move():
+    """Issue 29, case 7: the horse re-formed at scale 0.93 after a fifth of its robots went,
+    and a robot whose cell became a hole of the smaller shape wandered there with nowhere to
+    step aside; the paper's one mover needed that cell to reach its target and waited behind it
+    for good (65.9 % coverage for 200,000 steps). A wanderer that cannot step aside takes the
+    mover's target, under every motion, and the mover wanders in its place."""
+    config = configure(SHAPES / "horse.png", cells=14, strategy="paper", seed=2,
+                       faults=(FaultEvent(4000, "remove", 0.2),))  # fmt: skip
+    swarm = Runner(start_swarm(config, load_world(config)), max_steps=12_000).finish()
+    assert swarm.complete and swarm.world.groups[0].shape.scale < 1
+    assert swarm.faults.log[0]["recovery_steps"] is not None

@@ -497,8 +497,11 @@ class Steering:
     def _make_way(self, blocked: np.ndarray, blocker: np.ndarray) -> np.ndarray:
         """Resolve what stands in blocked movers' way; return idle robots asked to step aside.
 
-        Idle robots (waiting or wandering, at rest) step aside. Under `Motion.SWAP` a wanderer
-        caught inside its own shape takes the mover's target instead (`_hand_over`); a ring of
+        Idle robots (waiting or wandering, at rest) step aside. A wanderer that cannot, caught
+        inside its own shape or in a pocket of it with no free cell to step to, takes the
+        mover's target instead (`_hand_over`): under every motion, or a wanderer left in a hole
+        of a shape re-formed smaller blocks the paper's one mover for ever. Under
+        `Motion.SWAP` a ring of
         resting movers each waiting for the next passes its targets round; two movers trade
         targets when that shortens their trips (`_trips`); a settled robot of the same group
         swaps targets with the mover; no robot takes part in two of these in one step; and a
@@ -511,14 +514,15 @@ class Steering:
         state = swarm.state[robot]
         at_rest = swarm.ahead[robot] == 0
         idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
-        if self.motion is Motion.ROUTE:
-            return blocker[idle]
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
         wanders = idle & (state == WANDERING)  # a waiting robot may still be sent elsewhere
-        caught = wanders & same_group & self._in_own_shape(robot)
+        trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
+        caught = wanders & same_group & trapped
         if caught.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
             return self._make_way(blocked[~caught], blocker[~caught])
+        if self.motion is Motion.ROUTE:
+            return blocker[idle]
         settled = is_robot & (state == SETTLED)
         waits_for_mover = same_group & at_rest & (state == MOVING)
         givers, receivers = rotate_rings(blocked[waits_for_mover], robot[waits_for_mover])
@@ -600,24 +604,27 @@ class Steering:
         )
 
     def _random_free_step(self, robots: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
-        """A random direction to an enterable neighbour cell (0 where there is none).
-
-        Idle robots keep out of every shape, their own group's included, unless a new shape was
-        drawn over them.
-        """
+        """A random direction to an enterable neighbour cell (0 where there is none), of
+        `_free_steps`."""
         if len(robots) == 0:
             return np.zeros(0, dtype=np.int64)
+        ok = self._free_steps(robots, own_shape_too=own_shape_too)
+        score = np.where(ok, self.swarm.rng.random((len(robots), 4)), -1.0)
+        best = np.argmax(score, axis=1)
+        return np.where(score.max(axis=1) >= 0, best + 1, 0)
+
+    def _free_steps(self, robots: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
+        """Per robot ``(k, 4)``, which neighbour cells (by `STEPS` direction 1 to 4) an idle robot
+        may step into: free, and out of every shape (its own group's too, with `own_shape_too`)
+        unless a new shape was drawn over it, which it must be able to walk out of."""
         swarm, lattice = self.swarm, self.swarm.lattice
         here = lattice.key(rows(swarm.cell, robots))
         near = here[:, None] + lattice.offsets[None, 1:]
         groups = np.full(len(robots), -1) if own_shape_too else swarm.group[robots]
         ok = lattice.enterable(near, groups[:, None])
-        # an idle robot that a changed shape now covers must be able to walk out of it
         caught = np.flatnonzero(own_shape_too & (lattice.owner[here] >= 0))
         ok[caught] = lattice.holder[near[caught]] == FREE
-        score = np.where(ok, swarm.rng.random((len(robots), 4)), -1.0)
-        best = np.argmax(score, axis=1)
-        return np.where(score.max(axis=1) >= 0, best + 1, 0)
+        return ok
 
     def _count_waiting(
         self, starters: np.ndarray, stuck: np.ndarray, steps: _Steps, winners: np.ndarray
