@@ -155,3 +155,31 @@ def test_a_world_and_its_shapes_are_read_only():
             array[0] = 1
     grid[0, 1] = False  # the shape kept its own copy
     assert group.shape.grid[0, 1]
+
+
+def test_fitting_a_wide_shape_to_few_robots_resamples_it_a_few_times_not_once_per_side(
+    monkeypatch,
+):
+    """Issue 29, case 8: --cells 2000 --agents 5 took 3 minutes (--cells 3000 over 15): the
+    fit resampled the whole grid once for every side from 1,999 down. Its cost is now a few
+    dozen resamplings, and it finds the copy the side-by-side search found."""
+    from swarmshape.core import shape as module
+
+    calls = []
+    real = module.resample
+
+    def counted(fraction, side):
+        calls.append(side)
+        return real(fraction, side)
+
+    monkeypatch.setattr(module, "resample", counted)
+    yy, xx = np.mgrid[:100, :200]
+    wide = Shape(((xx - 100) / 100) ** 2 + ((yy - 50) / 50) ** 2 <= 1)  # an ellipse
+    for agents in (5, 700, wide.count - 1):
+        calls.clear()
+        fitted = wide.fitted(agents)
+        assert len(calls) <= 30, len(calls)
+        assert 0 < fitted.count <= agents
+        bigger = next(s for s in (wide._copy(side, False) for side in range(199, 0, -1))
+                      if s.count <= agents)  # fmt: skip
+        assert (fitted.count, fitted.scale) == (bigger.count, bigger.scale)
