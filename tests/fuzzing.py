@@ -981,7 +981,7 @@ def mutated_state(pick: Pick, path: Path) -> bytes:
         return mutate_bytes(pick, path.read_bytes())
     manifest, arrays = state_members(path)
     how = pick.choice(["value", "value", "array", "array", "array", "drop", "extra", "head",
-                       "deep", "raw"])  # fmt: skip
+                       "deep", "raw", "bomb"])  # fmt: skip
     values = manifest["values"]
     if how == "value":
         key = pick.choice(sorted(values))
@@ -1001,6 +1001,8 @@ def mutated_state(pick: Pick, path: Path) -> bytes:
         manifest[pick.choice(["format", "version", "values"])] = pick.choice(INTERESTING)
     elif how == "deep":
         values[pick.choice(sorted(values))] = json.loads("[" * 50 + "]" * 50)
+    elif how == "bomb":  # 64 MB of zeros, which pack to a few kB (issue 29: 3 GB took 3 GB)
+        arrays[pick.choice(sorted(arrays))] = np.zeros((pick.choice([1, 2000]), 4000), np.float64)
     data = state_bytes(manifest, arrays, compressed=pick.integer(0, 1) == 1, deep=how == "deep")
     return raw_member(data, pick.choice(["manifest", *sorted(arrays)])) if how == "raw" else data
 

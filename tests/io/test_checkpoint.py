@@ -22,7 +22,7 @@ from swarmshape.io.checkpoint import PICKLE_HEADER, load_state
 from swarmshape.runs import build, resume, run, save
 from swarmshape.strategies import available
 from tests.conftest import SHAPES
-from tests.fuzzing import changed_state, state_members
+from tests.fuzzing import changed_state, state_bytes, state_members
 
 
 def config_for(strategy: str):
@@ -303,3 +303,31 @@ def test_a_crafted_value_out_of_range_is_refused_before_the_first_step(tmp_path,
     path.write_bytes(changed_state(path, change(members)))
     with pytest.raises(InputError, match=re.escape(message)):
         resume(path)
+
+
+def test_a_state_member_that_unpacks_past_its_run_is_refused_before_it_is_unpacked(
+    tmp_path, monkeypatch
+):
+    """Issue 29, case 10: a 2.9 MB state with a member that unpacked to 3 GB took 3 GB and 9 s
+    before it was refused, though a state's sizes are promised to be checked before anything is
+    decompressed. The sizes its arrays declare are now held against what a run of the world
+    its manifest describes can keep, before any array is read."""
+    import numpy.lib.format as npy
+
+    path, _ = saved_state(tmp_path)
+    manifest, members = state_members(path)
+    cells = int(np.prod(manifest["values"]["swarm.world.size"]))
+    members["swarm.driver.planner.rows"] = np.zeros((20_000, cells))  # zeros pack to nothing
+    path.write_bytes(state_bytes(manifest, members))
+    assert path.stat().st_size < 1_000_000
+    read = []
+
+    def reading(*args, **kwargs):
+        read.append(args[0].name)
+        return real(*args, **kwargs)
+
+    real = npy.read_array
+    monkeypatch.setattr(npy, "read_array", reading)
+    with pytest.raises(InputError, match=r"s\.state: state file too large for its run \("):
+        load_state(path)
+    assert read == ["manifest.npy"]  # and no array
