@@ -92,11 +92,11 @@ def load_state(path: Path) -> dict[str, Any]:
             manifest = _manifest(archive[MANIFEST])
             declared = {name: _declared(archive.zip, name) for name in archive.zip.namelist()}
             declared.pop(f"{MANIFEST}.npy")
-            most = most_bytes(manifest)
-            if most is None:
-                raise ValueError("a manifest that does not say the size of its world")
-            if sum(declared.values()) > most:
-                raise StateTooLarge(sum(declared.values()), most)
+            most, total = most_bytes(manifest), sum(declared.values())
+            if most is None and total:
+                raise ValueError("arrays, and a manifest that does not say the size of its world")
+            if total > (most or 0):
+                raise StateTooLarge(total, most or 0)
             members = {name: archive[name] for name in archive.files if name != MANIFEST}
         if not all(isinstance(member, np.ndarray) for member in members.values()):
             raise ValueError("a member that is not an array")  # numpy hands those over as bytes
