@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape, ShapeError
-from swarmshape.core.world import GroupSpec, WorldError, build_world
+from swarmshape.core.world import GroupSpec, WorldError, build_world, cells_at
 from tests.conftest import grid_from
 
 L_SHAPE = grid_from("""
@@ -183,3 +183,12 @@ def test_fitting_a_wide_shape_to_few_robots_resamples_it_a_few_times_not_once_pe
         bigger = next(s for s in (wide._copy(side, False) for side in range(199, 0, -1))
                       if s.count <= agents)  # fmt: skip
         assert (fitted.count, fitted.scale) == (bigger.count, bigger.scale)
+
+
+def test_start_cells_picked_by_place_are_those_of_the_whole_list():
+    world = build_world([GroupSpec("g", Shape(grid_from("###\n#.#")), (1, 2, 3), 40)])
+    every = world.start_cells()
+    rng = np.random.default_rng(3)
+    chosen = rng.choice(len(every), 25, replace=False)
+    assert np.array_equal(cells_at(world.start_mask(), chosen), every[chosen])
+    assert np.array_equal(cells_at(world.start_mask(), np.arange(len(every))), every)

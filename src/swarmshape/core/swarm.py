@@ -26,7 +26,7 @@ from swarmshape.core.options import option, spec_of
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING, State
-from swarmshape.core.world import World, WorldError
+from swarmshape.core.world import World, WorldError, cells_at
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
@@ -136,8 +136,8 @@ class Swarm:
         self._take(world, plugin, seed, params or Params())
         n = world.agents
         if start is None:  # random free cells, drawn from the run's one generator
-            starts = world.start_cells()
-            start = starts[self.rng.choice(len(starts), n, replace=False)]
+            free = world.start_mask()
+            start = cells_at(free, self.rng.choice(int(free.sum()), n, replace=False))
         self.cell = np.array(start, dtype=np.int64)
         self.start_cell = self.cell.copy()
         self.direction = np.zeros(n, dtype=np.int64)
@@ -319,7 +319,7 @@ class Swarm:
         self.lattice.mark_targets(world.targets, world.target_group)
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
-        self.target_at = np.full(world.size, -1, dtype=np.int64)
+        self.target_at = np.full(world.size, -1, dtype=np.int32)  # up to 25,000,000 targets
         self.target_at[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
         """The index of the target at each cell, -1 where there is none."""
         self.dead = self._find_dead()
