@@ -32,7 +32,7 @@ from swarmshape import strategies
 from swarmshape.core.audit import overlapping_pairs
 from swarmshape.core.guard import PluginCode
 from swarmshape.core.shape import Shape
-from swarmshape.core.snapshot import Snapshot, SnapshotError
+from swarmshape.core.snapshot import Snapshot, SnapshotError, prefixed
 from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
 from swarmshape.core.swarm import Swarm
@@ -246,8 +246,8 @@ def saved_and_resumed(swarm: Swarm, cls: type[Strategy]) -> Swarm:
     """`swarm` written to a state file and read back, by a fresh plug-in of `cls`."""
     with tempfile.TemporaryDirectory(prefix="swarmshape-check-") as folder:
         path = Path(folder) / "check.state"
-        save_state(path, swarm.snapshot())
-        saved = Snapshot(load_state(path))
+        save_state(path, prefixed("swarm", swarm.snapshot()))  # as a run saves it
+        saved = Snapshot(load_state(path)).part("swarm")
     return Swarm.restored(saved, strategies.create(cls))
 
 
