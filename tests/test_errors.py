@@ -86,6 +86,9 @@ def bad_files(tmp_path_factory) -> Path:
     (folder / "far.toml").write_text(
         "[[groups]]\nshape = 'one.png'\npose = { x = 99999999999999999999, y = 2 }\n"
     )
+    (folder / "turned.toml").write_text(
+        "[[groups]]\nshape = 'one.png'\npose = {x = 3, y = 3, rotation = 45}\n"
+    )
     (folder / "nul.toml").write_text('[[groups]]\nshape = "o\\u0000ne.png"\n')
     (folder / "start.csv").write_text("x,y\n0,0\n1,1\n")
     (folder / "letters.csv").write_text("x,y\na,b\n")

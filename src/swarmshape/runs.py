@@ -24,7 +24,7 @@ from swarmshape import strategies
 from swarmshape.config import RunConfig, plugin_options
 from swarmshape.core.faults import Faults
 from swarmshape.core.plugin import Plugin
-from swarmshape.core.snapshot import Snapshot, prefixed
+from swarmshape.core.snapshot import Snapshot, SnapshotError, prefixed
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, build_world, packed_start
 from swarmshape.errors import InputError
@@ -139,7 +139,10 @@ def resume(path: Path, strategy: str | None = None) -> tuple[RunConfig, Swarm]:
             f"never loads code, so name it again to resume: --strategy {config.strategy}"
         )
     plugin = strategies.create(config.strategy, plugin_options(config))
-    return config, Swarm.restored(saved.part("swarm"), plugin)
+    try:
+        return config, Swarm.restored(saved.part("swarm"), plugin)
+    except SnapshotError as error:
+        raise SnapshotError(f"{path}: {error}") from None
 
 
 class Observer:

@@ -225,3 +225,13 @@ def test_shrinking_averages_each_box_as_pillows_box_filter(size, out):
     pillow = np.stack([np.asarray(Image.fromarray(row[None]).resize((out, 1), Image.BOX))[0]
                        for row in pixels])  # fmt: skip
     assert np.allclose(_box_average(pixels, out, axis=1), pillow, atol=1e-6)
+
+
+def test_a_shape_that_vanishes_at_the_default_size_names_the_size(tmp_path):
+    """Issue 29, case 13: without --cells this said "the shape vanishes at --cells None"."""
+    from swarmshape.io.bitmap import DEFAULT_CELLS
+
+    image = np.full((400, 400), 255)
+    image[0, 0] = image[-1, -1] = 0  # two dots far apart: each a sliver of its cell
+    with pytest.raises(BitmapError, match=f"vanishes at {DEFAULT_CELLS} cells across"):
+        load_grid(write(tmp_path / "dots.png", image))

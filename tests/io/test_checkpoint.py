@@ -285,6 +285,14 @@ CRAFTED = {
         lambda m: {"swarm.faults.log": [dict.fromkeys(LOG_KEYS, "x")]},
         "log is not a list of fault entries",
     ),
+    "a saved setting out of range": (  # was blamed on --failure-rate, with no file named
+        lambda m: {"config.failure_rate": 2.0},
+        "s.state: damaged state: a saved setting is refused (--failure-rate",
+    ),
+    "a value named with its file": (
+        lambda m: {"swarm.wander_rate": 7.0},
+        "s.state: damaged state: swarm.wander_rate is 7.0",
+    ),
     "robots lost that are there": (
         lambda m: {"swarm.faults.lost_at": np.zeros_like(m["swarm.faults.lost_at"])},
         "lost_at disagrees with which robots are lost",
@@ -331,3 +339,15 @@ def test_a_state_member_that_unpacks_past_its_run_is_refused_before_it_is_unpack
     with pytest.raises(InputError, match=r"s\.state: state file too large for its run \("):
         load_state(path)
     assert read == ["manifest.npy"]  # and no array
+
+
+@pytest.mark.parametrize(
+    "version, message",
+    [('"3"', "its format version is not a number"), ("99", "format version 99; this")],
+)
+def test_a_state_of_another_version_says_which(tmp_path, version, message):
+    """Issue 29, case 13: a version of '3' read "format version '3'; this reads version 3"."""
+    path, _ = saved_state(tmp_path)
+    rewritten(path, lambda text: re.sub(r'"version": \d+', f'"version": {version}', text))
+    with pytest.raises(InputError, match=re.escape(message)):
+        load_state(path)

@@ -122,7 +122,7 @@ def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
     sized = resample(picture.ink, across)
     if not sized.any():
         raise BitmapError(
-            f"{picture.path}: the shape vanishes at --cells {cells}; {_help(picture)}"
+            f"{picture.path}: the shape vanishes at {across} cells across; {_help(picture)}"
         )
     kept, expected = int(sized.sum()), picture.ink.mean() * sized.size
     if kept <= 2 < picture.ink.sum():
@@ -168,7 +168,7 @@ def _help(picture: Picture) -> str:
 
 
 def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
-    """Pixels as RGBA floats, and whether the editor wrote the file (one cell per pixel)."""
+    """Pixels as 8-bit RGBA, and whether the editor wrote the file (one cell per pixel)."""
     readable_file(path, "an image or a .toml scenario", BitmapError)
     try:
         with warnings.catch_warnings():

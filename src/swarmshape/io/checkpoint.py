@@ -177,9 +177,12 @@ def _count(value: Any) -> bool:
 def _checked(path: Path, manifest: Any, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         raise InputError(f"{path}: not a swarmshape state file (write one with --save-state)")
-    if manifest.get("version") != VERSION:
+    version = manifest.get("version")
+    if type(version) is not int:  # '3' would read "version '3'; this reads version 3"
+        raise InputError(f"{path}: damaged state file (its format version is not a number)")
+    if version != VERSION:
         raise InputError(
-            f"{path}: a state file of format version {manifest.get('version')!r}; this "
+            f"{path}: a state file of format version {version}; this "
             f"swarmshape reads version {VERSION}"
         )
     listed, plain = manifest.get("arrays"), manifest.get("values")

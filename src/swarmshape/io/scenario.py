@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from PIL import ImageColor
 
-from swarmshape.core.shape import Pose, Shape
+from swarmshape.core.shape import Pose, Shape, ShapeError
 from swarmshape.core.world import GroupSpec, World
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import DEFAULT_THRESHOLD, grid_for, grid_of, load_grid, read_picture
@@ -147,7 +147,10 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
             raise ScenarioError(f"{where.path}: {label}.pose must be a table like {{x = 0, y = 0}}")
         where.known(pose_table, POSE_KEYS, f"{label}.pose")
         values = {k: where.typed(v, int, f"{label}.pose.{k}") for k, v in pose_table.items()}
-        pose = Pose(**values)
+        try:
+            pose = Pose(**values)
+        except ShapeError as error:
+            raise ScenarioError(f"{where.path}: {label}.pose: {error}") from None
     name = where.typed(table.get("name", f"group {index + 1}"), str, f"{label}.name")
     return GroupSpec(name, Shape(grid), rgb, agents, pose)
 
