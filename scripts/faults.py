@@ -60,6 +60,11 @@ too when asked with --paper-at-concurrent-rate)."""
 HEAL_LIMIT = {"optimal": 20_000, "greedy": 20_000, "random": 40_000, "paper": 400_000}
 """Steps after the loss within which a run must be whole again (those of `LIMIT`: formation
 takes far fewer on these shapes; a run still short by then is stuck, not slow)."""
+HEAL_CELLS = {"paper": 16}
+"""Cells across a shipped shape, per strategy (others: the image's own size, up to 32). The
+paper's one mover at a time forms the 300 to 700-cell shipped shapes in 100,000 steps and
+more: twenty seeds of eleven shapes would take a day on this machine, so it forms them at 16
+cells across (60 to 180 cells); `--paper-cells` changes it."""
 
 
 def heal_case(case: tuple[str, str, int]) -> dict:
@@ -104,7 +109,8 @@ def heal_swarm(shape: str, strategy: str, seed: int) -> Swarm:
         groups = 2 if shape.startswith("random2") else 1
         world = random_world(np.random.default_rng(int(shape.split(":")[1])), groups)
         return Swarm(world, create(strategy), seed)
-    return build(configure(SHAPES / shape, strategy=strategy, seed=seed))
+    cells = HEAL_CELLS.get(strategy) if SHAPES.joinpath(shape).suffix == ".png" else None
+    return build(configure(SHAPES / shape, strategy=strategy, seed=seed, cells=cells))
 
 
 def random_world(rng: np.random.Generator, groups: int) -> World:
@@ -292,7 +298,10 @@ def main() -> None:
     parser.add_argument("--random", type=int, default=20, help="with --heal: random shapes")
     parser.add_argument("--seeds", type=int, default=20, help="with --heal: seeds 0 to N-1")
     parser.add_argument("--jobs", type=int, default=2, help="with --heal: processes")
+    parser.add_argument("--paper-cells", type=int, help="with --heal: cells across for paper")
     args = parser.parse_args()
+    if args.paper_cells is not None:
+        HEAL_CELLS["paper"] = args.paper_cells
     if args.heal:
         shipped = args.shapes or sorted(
             p.name for p in SHAPES.iterdir() if p.suffix in (".png", ".toml")
