@@ -170,6 +170,8 @@ class Runner:
         self.swarm = swarm
         self.observers = tuple(observers)
         self.max_steps = RunConfig.max_steps if max_steps is None else max_steps
+        self.stopped = False
+        """Asked to end after the step under way (Ctrl+C), as if out of steps."""
         for observer in self.observers:
             observer.capture(swarm)
 
@@ -180,10 +182,15 @@ class Runner:
     @property
     def finished(self) -> bool:
         """Formed (or a local program gone quiet, or no robot left that can move) with no fault
-        still to come, or out of steps."""
+        still to come, out of steps, or stopped."""
         swarm = self.swarm
         settled = swarm.complete or swarm.driver.quiet or swarm.stranded
-        return (settled and not swarm.faults.ahead(swarm.step_count)) or self.out_of_steps
+        done = settled and not swarm.faults.ahead(swarm.step_count)
+        return done or self.out_of_steps or self.stopped
+
+    def stop(self) -> None:
+        """End the run after the step under way: its observers close on what it reached."""
+        self.stopped = True
 
     def step(self) -> None:
         self.swarm.step()

@@ -128,6 +128,7 @@ class Session:
             with self._loading():
                 return prepared(on)
 
+        interrupted = False
         with ended_by_signals(), self.outputs.observers() as observers:
             if self.window or self.editing:
                 swarm = self._show(config, world, make_swarm, observers)
@@ -136,7 +137,9 @@ class Session:
                 self._can_save(swarm)
                 say(opening_line(swarm, config))
                 runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
-                runner.finish()
+                with stopped_by_ctrl_c(runner):
+                    runner.finish()
+                interrupted = runner.stopped
             if swarm is None:
                 return None
             if self.outputs.save_state:
@@ -146,6 +149,8 @@ class Session:
                 text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
                 write_text(self.outputs.metrics, text)
         say(summary_line(metrics))
+        if interrupted:  # its outputs hold what it reached; the exit status says it was cut short
+            raise KeyboardInterrupt
         return metrics
 
     def _can_save(self, swarm: Swarm) -> None:
@@ -247,6 +252,26 @@ def ended_by_signals() -> Iterator[None]:
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
+
+
+@contextlib.contextmanager
+def stopped_by_ctrl_c(runner: Runner) -> Iterator[None]:
+    """A first Ctrl+C ends `runner`'s run after the step under way, so that its outputs and
+    summary keep what it reached; a second one interrupts at once (and keeps nothing)."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield  # signals reach only the main thread; an ignored Ctrl+C stays ignored
+        return
+
+    def stop(_number: int, _frame: object) -> None:
+        runner.stop()
+        signal.signal(signal.SIGINT, previous)
+
+    signal.signal(signal.SIGINT, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def say(line: str) -> None:

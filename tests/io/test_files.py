@@ -3,7 +3,9 @@ and a failure to write is one line; inputs that are not regular files are refuse
 
 from __future__ import annotations
 
+import csv
 import errno
+import json
 import os
 import resource
 import signal
@@ -18,6 +20,8 @@ from swarmshape.cli import main
 from swarmshape.errors import InputError
 from swarmshape.io import files
 from swarmshape.io.files import OutputError, atomic_write, check_output
+from swarmshape.runs import Runner, build, configure, resume
+from swarmshape.session import stopped_by_ctrl_c
 from tests.conftest import SHAPES
 
 LINE = str(SHAPES / "line.png")
@@ -346,3 +350,36 @@ def test_a_nul_byte_in_an_input_name_is_one_line(tmp_path, capsys):
     ):
         assert main(argv) == 2
         assert "li\\x00ne.png: no such file (its name holds a NUL byte)" in capsys.readouterr().err
+
+
+def test_a_first_ctrl_c_keeps_what_a_headless_run_reached(tmp_path):
+    """Issue 29, case 18: Ctrl+C on a headless run printed "interrupted" and kept nothing."""
+    command = [sys.executable, "-m", "swarmshape", str(SHAPES / "star.png"), "--headless",
+               "--strategy", "paper", "--seed", "1", "--trace", "t.csv", "--metrics", "m.json",
+               "--save-state", "s.state"]  # fmt: skip
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
+    process = subprocess.Popen(command, cwd=tmp_path, env=env, text=True,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)  # fmt: skip
+    deadline = time.monotonic() + 60
+    while not any(p.stat().st_size > 1000 for p in tmp_path.glob(".swarmshape-*")):
+        assert time.monotonic() < deadline and process.poll() is None
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 130 and "interrupted" in err, err
+    reached = json.loads((tmp_path / "m.json").read_text())
+    assert reached["steps"] is None and reached["steps_run"] > 0
+    assert f"not formed after {reached['steps_run']:,} steps" in out
+    rows = list(csv.DictReader((tmp_path / "t.csv").open()))
+    assert int(rows[-1]["step"]) == reached["steps_run"]
+    assert resume(tmp_path / "s.state")[1].step_count == reached["steps_run"]
+    assert not list(tmp_path.glob(".swarmshape-*"))
+
+
+def test_a_second_ctrl_c_interrupts_at_once():
+    runner = Runner(build(configure(SHAPES / "line.png", seed=1)), max_steps=10)
+    with pytest.raises(KeyboardInterrupt), stopped_by_ctrl_c(runner):
+        signal.raise_signal(signal.SIGINT)
+        assert runner.stopped and runner.finished and runner.swarm.step_count == 0
+        signal.raise_signal(signal.SIGINT)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
