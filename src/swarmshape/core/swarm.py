@@ -347,18 +347,21 @@ class Swarm:
         """`robots` wait for a target."""
         self.state[robots] = WAITING
 
-    def settle_exactly(self, settled: np.ndarray) -> None:
+    def settle_exactly(self, settled: np.ndarray, filling: np.ndarray | None = None) -> None:
         """Exactly the robots of the mask `settled` are settled (a local program says so anew
-        each step); the others that can act are moving if under way, else waiting."""
+        each step); the others that can act are moving if under way, else waiting. Those of
+        `filling` fill the targets they rest on as the settled do, without being settled."""
         working = self._mobile()
         self.state[working] = np.where(self.ahead[working] > 0, MOVING, WAITING)
         self.state[working & settled] = SETTLED
-        self._refill()
+        self._refill(None if filling is None else working & filling)
 
-    def _refill(self) -> None:
-        """A target is filled while a settled robot of its group rests on it."""
+    def _refill(self, filling: np.ndarray | None = None) -> None:
+        """A target is filled while a settled robot of its group (or one of `filling`) rests
+        on it."""
         self.filled[:] = False
-        under = self._target_under(np.flatnonzero(self.state == SETTLED))
+        robots = self.state == SETTLED if filling is None else (self.state == SETTLED) | filling
+        under = self._target_under(np.flatnonzero(robots))
         self.filled[under[under >= 0]] = True
 
     def _target_under(self, robots: np.ndarray) -> np.ndarray:
