@@ -36,6 +36,7 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench import COLOUR, SHAPES, disc, world_of
+from swarmshape.config import configure
 from swarmshape.core.faults import Faults
 from swarmshape.core.metrics import coverage, run_metrics
 from swarmshape.core.shape import Shape
@@ -43,7 +44,7 @@ from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import SETTLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
-from swarmshape.runs import build, configure
+from swarmshape.runs import build
 from swarmshape.strategies import create
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"

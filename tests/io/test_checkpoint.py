@@ -287,7 +287,7 @@ CRAFTED = {
     ),
     "a saved setting out of range": (  # was blamed on --failure-rate, with no file named
         lambda m: {"config.failure_rate": 2.0},
-        "s.state: damaged state: a saved setting is refused (--failure-rate",
+        "s.state: failure_rate must be a number from 0 up to",
     ),
     "a value named with its file": (
         lambda m: {"swarm.wander_rate": 7.0},
