@@ -153,7 +153,7 @@ def test_a_failure_of_a_strategys_own_code_is_one_line_naming_it(capsys, name, m
     without a word."""
     shape = str(SHAPES / ("two-squares.toml" if "Groups" in name else "line.png"))
     assert main([shape, "--headless", "--strategy", f"tests.test_check:{name}"]) == 2
-    err = capsys.readouterr().err.splitlines()
+    err = [line for line in capsys.readouterr().err.splitlines() if " warning: " not in line]
     assert len(err) == 1 and err[0].startswith("swarmshape: error: "), err
     assert message in err[0], err[0]
 
@@ -168,10 +168,12 @@ def test_check_reports_a_strategys_failure_in_plain_words(capsys, name, message)
 
 def test_check_stops_a_step_that_never_ends():
     """Issue 29, case 9: a strategy that looped hung the check for ever."""
-    report = check_strategy(Loops, runs=2, step_seconds=0.3)
+    # the limit leaves room for a start that compiles the kernels on a loaded machine (0.3 s
+    # did not, under a load of 8 on 2 cores); the loop is caught at step 2 all the same
+    report = check_strategy(Loops, runs=2, step_seconds=3.0)
     assert len(report.problems) == 1
     assert report.problems[0].endswith(
-        "step 2 took over 0.3 s (is the strategy caught in a loop?); the check stopped it"
+        "step 2 took over 3 s (is the strategy caught in a loop?); the check stopped it"
     )
 
 
@@ -179,7 +181,8 @@ def test_code_that_fails_as_it_loads_is_its_own_failure(tmp_path, capsys):
     (tmp_path / "broken.py").write_text("raise RuntimeError('import boom')\n")
     (tmp_path / "made.py").write_text(
         "from swarmshape.strategies.concurrent import Optimal\n"
-        "class Made(Optimal):\n    name = 'made'\n    def __init__(self):\n        1 / 0\n"
+        "class Made(Optimal):\n    name = 'made'\n"
+        "    def __init__(self, options=None):\n        1 / 0\n"
     )
     for spec, where in ((f"{tmp_path / 'broken.py'}:X", "broken.py, line 1"),
                         (f"{tmp_path / 'made.py'}:Made", "made.py, line 5")):  # fmt: skip
