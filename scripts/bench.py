@@ -12,13 +12,17 @@ ratios divide by trip length over the top speed, which ignores acceleration and 
 lower bound than today's: the new ratios are the stricter of the two.
 
 `--quick` runs the 1,000-robot rows and the fixed-cost rows only (about a minute);
-`--million` adds a 1,000,000-robot disc run from the shell under a time cap (`--cap`).
+`--million` adds a 1,000,000-robot disc run from the shell under a time cap (`--cap`);
+`--caps` runs only the inputs at the caps (issue 29): shapes fitted to few robots, the largest
+arena, the largest pictures, a million start cells and a state that unpacks to 3 GB, each from
+the shell with its own wall time and peak memory.
 Targets live here and only here: a benchmark, not a timed test.
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import os
 import platform
@@ -27,11 +31,13 @@ import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
 
 import numpy as np
+import numpy.lib.format as npy
 from PIL import Image
 
 from swarmshape.config import RunConfig
@@ -41,7 +47,7 @@ from swarmshape.core.shape import Shape
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.io.bitmap import load_grid
-from swarmshape.runs import Observer, Runner, start_swarm
+from swarmshape.runs import Observer, Runner, load_world, save, start_swarm
 
 ROOT = Path(__file__).resolve().parent.parent
 SHAPES = ROOT / "shapes"
@@ -54,6 +60,21 @@ BLOCK_SHELL_SECONDS = 0.6
 DISC_100K_SHELL_SECONDS = 60.0
 STEPPING_TARGETS = {1000: 5000.0, 100_000: 100.0}  # steps/s over the first 20 steps (issue 32)
 MILLION_MOONSHOT = (600.0, 8.0)  # seconds, GB
+CAPS = {  # name: (arguments, seconds, GB): an input at the caps, from the shell
+    "fit 2,000 cells across to 5 robots": (["horse.png", "--cells", "2000", "--agents", "5",
+                                            "--preview"], 10.0, 0.5),
+    "fit 3,000 cells across to 5 robots": (["horse.png", "--cells", "3000", "--agents", "5",
+                                            "--preview"], 15.0, 0.8),
+    "arena 5000x5000, 20 robots, 3 steps": (["line.png", "--arena", "5000x5000", "--agents",
+                                             "20", "--headless", "--max-steps", "3"], 60.0, 2.0),
+    "1 x 25,000,000 picture, preview": (["long.png", "--preview"], 15.0, 0.6),
+    "5000x5000 picture without ink": (["white.png", "--preview"], 10.0, 0.5),
+    "1,000,000 start cells for 16 robots": (["line.png", "--start", "million.csv",
+                                             "--headless", "--max-steps", "1"], 4.0, 0.3),
+    "state that unpacks to 3 GB": (["--load-state", "bomb.state", "--headless"], 3.0, 0.2),
+}  # fmt: skip
+"""Issue 29 measured 3 and over 15 minutes for the fits, 3 GB for the arena, 2 GB and 1.7 GB
+for the pictures, 11 s for the start cells and 3 GB and 9 s for the state."""
 
 OLD = {  # issue 11's measurements before the change: steps, ratio, wall seconds
     ("block", 1000): (220, 2.2, 3.4),
@@ -230,6 +251,71 @@ def from_shell(grid: np.ndarray, folder: Path, cap: float | None = None) -> dict
     }
 
 
+def caps(folder: Path) -> list[dict]:
+    """Each of `CAPS` in a fresh ``swarmshape`` process: its wall time, its own peak memory
+    (the child's maximum resident set, from wait4) and its exit status."""
+    _cap_inputs(folder)
+    rows = []
+    for name, (arguments, seconds_goal, gb_goal) in CAPS.items():
+        first = arguments[0]
+        if first.endswith(".png") and (SHAPES / first).exists():
+            arguments = [str(SHAPES / first), *arguments[1:]]
+        command = [str(Path(sys.executable).parent / "swarmshape"), *arguments]
+        started = time.perf_counter()
+        child = subprocess.Popen(command, cwd=folder, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE)  # fmt: skip
+        _, status, usage = os.wait4(child.pid, 0)
+        seconds = time.perf_counter() - started
+        said = child.stderr.read().decode(errors="replace").strip()
+        child.stderr.close()
+        rows.append({
+            "case": name, "seconds": round(seconds, 2), "peak_gb": round(usage.ru_maxrss / 1e6, 2),
+            "exit": os.waitstatus_to_exitcode(status), "said": said.splitlines()[-1:] or [""],
+            "seconds_goal": seconds_goal, "gb_goal": gb_goal,
+        })  # fmt: skip
+        print_cap(rows[-1], flush=True)
+    return rows
+
+
+def _cap_inputs(folder: Path) -> None:
+    """The inputs of `CAPS` that are not shipped: pictures, start cells, a state bomb."""
+    Image.new("L", (25_000_000, 1), 0).save(folder / "long.png")
+    Image.new("L", (5000, 5000), 255).save(folder / "white.png")
+    (folder / "million.csv").write_text("x,y\n" + "1,1\n" * 1_000_000)
+    config = RunConfig(shape=SHAPES / "star.png", seed=1)
+    world = load_world(config)
+    swarm = Runner(start_swarm(config, world), max_steps=5).finish()
+    save(swarm, folder / "small.state", config)
+    with (
+        zipfile.ZipFile(folder / "small.state") as small,
+        zipfile.ZipFile(folder / "bomb.state", "w", zipfile.ZIP_DEFLATED) as bomb,
+    ):
+        for info in small.infolist():
+            if info.filename != "swarm.driver.planner.rows.npy":
+                bomb.writestr(info, small.read(info))
+        cells = world.size[0] * world.size[1]
+        shape = (3 * 2**30 // (8 * cells), cells)
+        header = io.BytesIO()
+        npy.write_array_header_2_0(header, {"descr": "<f8", "fortran_order": False,
+                                            "shape": shape})  # fmt: skip
+        with bomb.open("swarm.driver.planner.rows.npy", "w", force_zip64=True) as member:
+            member.write(header.getvalue())
+            zeros, left = bytes(2**24), shape[0] * shape[1] * 8
+            while left:
+                member.write(zeros[: min(left, len(zeros))])
+                left -= min(left, len(zeros))
+
+
+def print_cap(row: dict, flush: bool = False) -> None:
+    seconds = _against(row["seconds"], row["seconds_goal"], "<=")
+    memory = _against(row["peak_gb"], row["gb_goal"], "<=")
+    print(
+        f"  {row['case']:<38} {row['seconds']:>7.2f} s{seconds}  {row['peak_gb']:>5.2f} GB"
+        f"{memory}  exit {row['exit']}: {row['said'][0][:70]}",
+        flush=flush,
+    )
+
+
 def _peak_gb() -> float:
     """The largest resident set of any child process so far (Linux counts it in kB)."""
     return round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1e6, 2)
@@ -241,9 +327,19 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="1,000 robots and fixed costs only")
     parser.add_argument("--million", action="store_true", help="add 1,000,000 robots, capped")
     parser.add_argument("--cap", type=float, default=1800.0, help="seconds for --million")
+    parser.add_argument("--caps", action="store_true", help="only the inputs at the caps")
     args = parser.parse_args()
     if args.cap <= 0:
         parser.error("--cap must be above 0")
+    if args.caps:
+        with tempfile.TemporaryDirectory() as scratch:
+            rows = caps(Path(scratch))
+        out = args.out if args.out != ROOT / "docs" / "bench.json" else ROOT / "docs" / "caps.json"
+        out.write_text(
+            json.dumps({"date": date.today().isoformat(), "caps": rows}, indent=2) + "\n"
+        )
+        print(f"\nwritten to {out}")
+        return
     shapes = ["disc", "star", "ring", "letter", "horse"]
     sizes = [1000] if args.quick else [1000, 10_000]
     results: dict = {

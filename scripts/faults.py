@@ -1,4 +1,5 @@
-"""Fault figures: how each strategy heals a 1,000-cell disc. Not part of the test suite.
+"""Fault figures: how each strategy heals a 1,000-cell disc, and whether it heals every shape.
+Not part of the test suite.
 
 For each strategy the disc is formed (with one robot per cell, and with a quarter more as
 spares); then 20 % of the robots that form it are removed, at random or as one block (a band
@@ -11,8 +12,16 @@ failure rate. Writes ``docs/faults-keep.json`` (or ``docs/faults-rescale.json``)
 ``docs/faults-healing.png`` (a disc healing, drawn offscreen); the pictures heal with spares,
 which never leave the disc short of robots, so the mode changes nothing in them.
 
+``--heal`` runs the other question, on many shapes rather than one disc: every shipped shape
+(the two-group scenario too) and random shapes of one and two groups as the property tests draw
+them, each formed under each strategy for seeds 0-19, then 20 % of its robots removed at random;
+each must heal, or re-form smaller and heal that, within `HEAL_LIMIT` steps. Writes
+``docs/heal.json`` and prints every run that did not, with the command that repeats it.
+
     .venv/bin/python scripts/faults.py [--strategies optimal greedy random paper] [--cells 1000]
         [--on-loss keep|rescale] [--out docs/faults-keep.json] [--no-pictures | --pictures-only]
+    .venv/bin/python scripts/faults.py --heal [--strategies ...] [--seeds 20] [--jobs 2]
+        [--shapes horse.png ...] [--random 20] [--out docs/heal.json]
 """
 
 from __future__ import annotations
@@ -30,12 +39,16 @@ import numpy as np
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench import disc, world_of
+from bench import COLOUR, SHAPES, disc, world_of
+from swarmshape.config import configure
 from swarmshape.core.faults import Faults
 from swarmshape.core.metrics import coverage, run_metrics
+from swarmshape.core.shape import Shape
 from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.states import SETTLED
 from swarmshape.core.swarm import Params, Swarm
+from swarmshape.core.world import GroupSpec, World, build_world
+from swarmshape.runs import build
 from swarmshape.strategies import create
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -47,6 +60,104 @@ RATES = {"optimal": 1e-4, "greedy": 1e-4, "random": 1e-4, "paper": 1e-6}
 """Failure rate per robot per step during formation: paper's formation takes ~500 times as
 many steps, so it gets a rate ~100 times lower (and the concurrent rate is reported for it
 too when asked with --paper-at-concurrent-rate)."""
+
+
+HEAL_LIMIT = {"optimal": 20_000, "greedy": 20_000, "random": 40_000, "paper": 400_000}
+"""Steps after the loss within which a run must be whole again (those of `LIMIT`: formation
+takes far fewer on these shapes; a run still short by then is stuck, not slow)."""
+HEAL_CELLS = {"paper": 16}
+"""Cells across a shipped shape, per strategy (others: the image's own size, up to 32). The
+paper's one mover at a time forms the 300 to 700-cell shipped shapes in 100,000 steps and
+more: twenty seeds of eleven shapes would take a day on this machine, so it forms them at 16
+cells across (60 to 180 cells); `--paper-cells` changes it."""
+
+
+def heal_case(case: tuple[str, str, int]) -> dict:
+    """Form `shape` (a shipped file, or ``random:N`` / ``random2:N``: random shapes of one
+    or two groups) under `strategy` with `seed`, remove 20 % of its robots at random, and run
+    until it is whole again (re-formed smaller if need be) or `HEAL_LIMIT` steps have gone."""
+    shape, strategy, seed = case
+    started = time.perf_counter()
+    swarm = heal_swarm(shape, strategy, seed)
+    while not swarm.complete and swarm.step_count < LIMIT[strategy]:
+        swarm.step()
+    formed = swarm.step_count if swarm.complete else None
+    result = {"shape": shape, "strategy": strategy, "seed": seed, "formed_in": formed}
+    if formed is None:
+        return result | {"healed": False, "why": "did not form", "seconds": 0.0}
+    present = np.flatnonzero(swarm.present)
+    struck = swarm.rng.choice(present, round(SHARE * len(present)), replace=False)
+    swarm.fail(np.sort(struck), "remove", label="random")
+    while (
+        not swarm.complete
+        and not swarm.stranded
+        and swarm.step_count < formed + HEAL_LIMIT[strategy]
+    ):
+        swarm.step()
+    metrics = run_metrics(swarm)
+    return result | {
+        "robots_removed": len(struck),
+        "healed": swarm.complete,
+        "heal_steps": swarm.step_count - formed if swarm.complete else None,
+        "coverage": metrics["coverage"],
+        "scale": metrics["scale"],
+        "targets": metrics["targets"],
+        "overlaps": metrics["overlaps"],
+        "why": "" if swarm.complete else ("stranded" if swarm.stranded else "out of steps"),
+        "seconds": round(time.perf_counter() - started, 1),
+    }
+
+
+def heal_swarm(shape: str, strategy: str, seed: int) -> Swarm:
+    """The swarm of a `heal_case`, before its first step."""
+    if shape.startswith("random"):
+        groups = 2 if shape.startswith("random2") else 1
+        world = random_world(np.random.default_rng(int(shape.split(":")[1])), groups)
+        return Swarm(world, create(strategy), seed)
+    cells = HEAL_CELLS.get(strategy) if SHAPES.joinpath(shape).suffix == ".png" else None
+    return build(configure(SHAPES / shape, strategy=strategy, seed=seed, cells=cells))
+
+
+def random_world(rng: np.random.Generator, groups: int) -> World:
+    """Groups as the fault property test draws them: a random 4x5 bitmap each, a few robots
+    too many or too few."""
+    specs = []
+    spare = int(rng.integers(-3, 7))
+    for index in range(groups):
+        grid = rng.random((4, 5)) < 0.5
+        grid[rng.integers(4), rng.integers(5)] = True
+        specs.append(GroupSpec(f"g{index}", Shape(grid), COLOUR, max(1, int(grid.sum()) + spare)))
+    return build_world(specs)
+
+
+def heal_all(strategies: list[str], shapes: list[str], seeds: int, jobs: int, out: Path) -> int:
+    """Every `heal_case` of these, on `jobs` processes; a summary per shape and strategy, and
+    every run that did not heal, with how to repeat it."""
+    import multiprocessing
+
+    cases = [(shape, strategy, seed) for strategy in strategies for shape in shapes
+             for seed in range(seeds)]  # fmt: skip
+    results = []
+    with multiprocessing.Pool(jobs) as pool:
+        for result in pool.imap_unordered(heal_case, cases):
+            results.append(result)
+            if not result["healed"]:
+                print(f"NOT HEALED: {json.dumps(result)}", flush=True)
+    results.sort(key=lambda r: (r["strategy"], r["shape"], r["seed"]))
+    out.write_text(json.dumps(results, indent=1) + "\n")
+    failed = 0
+    for strategy in strategies:
+        for shape in shapes:
+            mine = [r for r in results if r["strategy"] == strategy and r["shape"] == shape]
+            healed = [r for r in mine if r["healed"]]
+            failed += len(mine) - len(healed)
+            steps = [r["heal_steps"] for r in healed]
+            smaller = sum(r["scale"] < 1 for r in healed)
+            spread = f"{min(steps):,} to {max(steps):,}" if steps else "-"
+            print(f"{strategy:8} {shape:18} healed {len(healed):2}/{len(mine)} "
+                  f"(re-formed smaller {smaller}), steps {spread}")  # fmt: skip
+    print(f"{len(results)} runs, {failed} not healed; {out}")
+    return failed
 
 
 def form(
@@ -193,7 +304,23 @@ def main() -> None:
         action="store_true",
         help="only the coverage plot (one heal per strategy) and the healing picture",
     )
+    parser.add_argument("--heal", action="store_true", help="the heal-every-shape runs instead")
+    parser.add_argument("--shapes", nargs="+", help="with --heal: shipped shapes (default all)")
+    parser.add_argument("--random", type=int, default=20, help="with --heal: random shapes")
+    parser.add_argument("--seeds", type=int, default=20, help="with --heal: seeds 0 to N-1")
+    parser.add_argument("--jobs", type=int, default=2, help="with --heal: processes")
+    parser.add_argument("--paper-cells", type=int, help="with --heal: cells across for paper")
     args = parser.parse_args()
+    if args.paper_cells is not None:
+        HEAL_CELLS["paper"] = args.paper_cells
+    if args.heal:
+        shipped = args.shapes or sorted(
+            p.name for p in SHAPES.iterdir() if p.suffix in (".png", ".toml")
+        )
+        shapes = shipped + [f"{kind}:{n}" for kind in ("random", "random2")
+                            for n in range(args.random)]  # fmt: skip
+        out = args.out if args.out != DOCS / "faults.json" else DOCS / "heal.json"
+        sys.exit(1 if heal_all(args.strategies, shapes, args.seeds, args.jobs, out) else 0)
     if args.pictures_only:
         pictures(args.strategies, args.cells, DOCS)
         return

@@ -30,6 +30,7 @@ import sys
 import tempfile
 import threading
 import time
+import zipfile
 import zlib
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -45,6 +46,10 @@ FRAME_FILES = "frame-[0-9][0-9][0-9][0-9][0-9][0-9][0-9].png"
 TEMP_PREFIX = ".swarmshape-"
 PROGRESS = re.compile(r"^swarmshape: (step \d+, coverage .*|\d+/\d+ runs)$")
 """The progress lines a run or a sweep writes off a terminal every 10 s (a slow machine)."""
+STOPPED = (128 + signal.SIGTERM, -signal.SIGTERM)
+"""How a process sent SIGTERM may end: having cleaned up, or at once (before a run began)."""
+OVERLAPS = re.compile(r", ([\d,]+) overlaps?, seed")
+"""Where a summary line says how many overlaps the run had: always 0, or something lied."""
 TIMEOUT = 120
 """Seconds a case may take before it counts as hung."""
 
@@ -109,13 +114,81 @@ class Mine(Optimal):
     description = "the optimal strategy, from a file"
 """
 
+HOSTILE = """import sys
+import numpy as np
+from swarmshape.strategies.concurrent import Optimal
+
+
+class Raises(Optimal):
+    name = "raises"
+
+    def on_step(self, swarm):
+        if swarm.step == 2:
+            raise RuntimeError("a bug of the user's")
+        super().on_step(swarm)
+
+
+class Writes(Optimal):
+    name = "writes"
+
+    def on_step(self, swarm):
+        swarm.world.seeds[:] = 0
+        swarm.targets[0] = 3
+        swarm.target[:] = 0
+
+
+class Nobody(Optimal):
+    name = "nobody"
+
+    def on_step(self, swarm):
+        swarm.assign(np.array([-1, 10**9]), np.array([0, 0]))
+
+
+class Exits(Optimal):
+    name = "exits"
+
+    def on_step(self, swarm):
+        sys.exit(swarm.step)
+
+
+class Plans(Optimal):
+    name = "plans"
+
+    def on_start(self, swarm):
+        self.order = list(np.argsort(swarm.targets[:, 0]))
+        super().on_start(swarm)
+
+
+class Keeps(Optimal):
+    name = "keeps"
+
+    def on_start(self, swarm):
+        self.table = {"cells": 1}
+        super().on_start(swarm)
+
+
+class Loops(Optimal):
+    name = "loops"
+
+    def on_step(self, swarm):
+        while swarm.step == 1:
+            pass
+        super().on_step(swarm)
+"""
+"""Strategies whose own code fails every way a user's might (issue 29): each must be one line
+naming it (exit 2), or a problem `check` reports (exit 3); `check` stops the loop. And two that
+keep state set up in on_start: one a state file holds, one it cannot."""
+HOSTILE_CLASSES = ["hostile.py:Raises", "hostile.py:Writes", "hostile.py:Nobody",
+                   "hostile.py:Exits", "hostile.py:Plans", "hostile.py:Keeps",
+                   "broken.py:X"]  # fmt: skip
+
 INPUTS = {
     "image": ["shape.png", "sub/dot.png"],
     "scenario": ["scenario.toml"],
     "sweep": ["sweep.toml"],
     "start": ["start.csv"],
     "results": ["results.csv"],
-    "state": ["paper.state", "optimal.state"],
+    "state": ["paper.state", "optimal.state", "faults.state"],
 }
 """The valid inputs of each kind in the material folder."""
 OTHERS = ["notes.txt", "data.npz", "mine.py", "sub", "."]
@@ -124,6 +197,7 @@ OTHERS = ["notes.txt", "data.npz", "mine.py", "sub", "."]
 def make_material(folder: Path) -> Path:
     """Write the valid inputs (see `INPUTS`) into `folder`, with swarmshape itself."""
     from swarmshape.config import configure
+    from swarmshape.core.faults import FaultEvent
     from swarmshape.experiments.results import open_results
     from swarmshape.experiments.sweep import read_sweep, run_key, run_one
     from swarmshape.runs import build, load_world, run, save
@@ -136,6 +210,8 @@ def make_material(folder: Path) -> Path:
     (folder / "scenario.toml").write_text(SCENARIO)
     (folder / "sweep.toml").write_text(SWEEP)
     (folder / "mine.py").write_text(STRATEGY)
+    (folder / "hostile.py").write_text(HOSTILE)
+    (folder / "broken.py").write_text("raise ImportError('broken on import')\n")
     (folder / "notes.txt").write_text("a note of the user's, not an input of any kind\n")
     np.savez(folder / "data.npz", values=np.arange(5))
     world = load_world(configure(folder / "shape.png", seed=0))
@@ -145,6 +221,9 @@ def make_material(folder: Path) -> Path:
     for strategy in ("paper", "optimal"):
         config = configure(folder / "shape.png", strategy=strategy, seed=1)
         save(run(build(config), max_steps=6), folder / f"{strategy}.state", config)
+    faults = (FaultEvent(2, "remove", 0.2), FaultEvent(3, "stall", 2))  # a log, lost, stalled
+    config = configure(folder / "shape.png", strategy="greedy", seed=1, faults=faults)
+    save(run(build(config), max_steps=9), folder / "faults.state", config)
     runs = list(read_sweep(folder / "sweep.toml"))
     settings = [f"config.{name}" for name in sorted(runs[0])]
     with open_results(folder / "results.csv", settings) as results:
@@ -158,7 +237,7 @@ def make_material(folder: Path) -> Path:
 
 WHOLE_NOISE = ["-1", "-7", "", "abc", "nan", "inf", "1.5", "1e3", " 3", "\u0663", "\uff11\uff12",
                "1_0", "0x10", "+4", "99999999999999999999999", "9" * 5000, "\u200b3",
-               "3\u00a0"]  # fmt: skip
+               "3\u00a0", "\u00b2", "\u2460", "1\u00b9"]  # fmt: skip
 """Text given where a whole number is expected: wrong, out of range, odd unicode (some of
 which Python reads as numbers: Arabic-Indic 3, fullwidth 12)."""
 FLOAT_NOISE = ["0", "-0.5", "2", "nan", "-nan", "inf", "1e309", "1e-320", "", "abc", "½", "0x1p-3",
@@ -169,7 +248,7 @@ SIZE_NOISE = ["0x0", "1x1", "10x-3", "99999x99999", "25000001x1", "axb", "x", ""
 STRATEGIES = ["optimal", "greedy", "random", "paper", "mine.py:Mine", "nope", "", "a:", ":", ":B",
               ".x:Y", "os:path", "swarmshape.core.motion:Limits", "swarmshape:Strategy",
               "missing.py:X", "notes.txt:X", "sub:X", "mine.py:", "mine.py:Optimal",
-              "x" * 300, "x" * 300 + ".py:X"]  # fmt: skip
+              "x" * 300, "x" * 300 + ".py:X", *HOSTILE_CLASSES]  # fmt: skip
 ORDERS = ["outward", "left-to-right", "random", "", "inward", "OUTWARD"]
 OPTIONS = [f"order={order}" for order in ORDERS] + [
     "startup=3", "alone=-1", "alone=1e3", "patience=²", "nope=1", "=", "order", "loss_memory=nan",
@@ -190,6 +269,16 @@ def size(pick: Pick, valid: Sequence[str]) -> str:
     return pick.choice(valid) if pick.integer(0, 2) else pick.choice(SIZE_NOISE)
 
 
+@dataclasses.dataclass(frozen=True)
+class Ending:
+    """How a case's process may be cut short from outside (only in a process of its own)."""
+
+    file_limit: int | None = None
+    """Bytes a file may grow to before writing fails, as on a full disk."""
+    stop_after: float | None = None
+    """Seconds after which the process is sent SIGTERM."""
+
+
 class Paths:
     """Paths in a case's folder, made as they are drawn: valid inputs, missing files,
     folders, links that work and links that dangle, odd names; and with `isolated` (only in
@@ -198,6 +287,7 @@ class Paths:
     def __init__(self, pick: Pick, folder: Path, isolated: bool) -> None:
         self.pick, self.folder, self.isolated = pick, folder, isolated
         self.used_isolated = False
+        self.ending = Ending()
         self._count = 0
 
     def _new(self, stem: str) -> str:
@@ -230,9 +320,7 @@ class Paths:
         if odd == "dangling":
             return self._link(self._new("gone") + suffix)
         if odd == "loop":
-            name = self._new("loop") + suffix
-            (self.folder / name).symlink_to(name)
-            return name
+            return self._loop(suffix)
         if odd in ("unicode", "long"):
             stem = "ψ ✓ é\u200b" if odd == "unicode" else "l" * (250 - len(suffix))
             name = stem + suffix
@@ -260,7 +348,7 @@ class Paths:
             return self._new("out") + suffix
         odd = pick.choice(["input", "input", "folder", "missing-folder", "fifo", "dangling",
                            "link", "device", "too-long", "unicode", "subfolder", "empty",
-                           "other-suffix", "trailing-slash"])  # fmt: skip
+                           "other-suffix", "trailing-slash", "loop"])  # fmt: skip
         if odd == "input":
             return pick.choice([name for names in INPUTS.values() for name in names] + OTHERS[:2])
         if odd == "folder":
@@ -275,6 +363,8 @@ class Paths:
             return self._link(self._new("target") + suffix)
         if odd == "link":
             return self._link(pick.choice(["notes.txt", "shape.png", "results.csv"]))
+        if odd == "loop":
+            return self._loop(suffix)
         if odd == "device":
             return pick.choice(["/dev/null", "/dev/full"])
         if odd == "too-long":
@@ -292,7 +382,8 @@ class Paths:
     def folder_output(self) -> str:
         """A path given where an output folder is expected (``--frames``, ``plot --out``)."""
         odd = self.pick.choice(["new", "new", "new", "sub", ".", "shape.png", "nested", "fifo",
-                                "dangling", "/dev/null", "too-long", "empty-folder"])  # fmt: skip
+                                "dangling", "/dev/null", "too-long", "empty-folder",
+                                "loop"])  # fmt: skip
         if odd == "new":
             return self._new("frames")
         if odd == "nested":
@@ -305,6 +396,8 @@ class Paths:
             return self._link(self._new("gone"))
         if odd == "too-long":
             return "f" * 300
+        if odd == "loop":
+            return self._loop("")
         if odd == "empty-folder":
             name = self._new("empty")
             (self.folder / name).mkdir()
@@ -325,6 +418,17 @@ class Paths:
             odd = self._new("pipe") + suffix
             os.mkfifo(self.folder / odd)
         return odd
+
+    def _loop(self, suffix: str) -> str:
+        """A symlink to itself, or one of two links to each other."""
+        name = self._new("loop") + suffix
+        if self.pick.integer(0, 1):
+            (self.folder / name).symlink_to(name)
+        else:
+            other = self._new("loop") + suffix
+            (self.folder / name).symlink_to(other)
+            (self.folder / other).symlink_to(name)
+        return name
 
     def _link(self, target: str) -> str:
         name = self._new("link") + Path(target).suffix
@@ -366,6 +470,13 @@ def run_options(pick: Pick, paths: Paths) -> dict[str, Callable[[], list[str]]]:
         "--positions": lambda: [paths.output([".npz", ".csv", ".NPZ", ".txt"])],
         "--positions-every": lambda: [whole(pick, ["1", "4"])],
         "--metrics": lambda: [paths.output([".json", ".txt", ""])],
+        "--fail": lambda: [f"{number(pick, ['0.2', '0.5', '3'])}@{whole(pick, ['0', '2'])}"],
+        "--stall": lambda: [f"{number(pick, ['0.3', '1'])}@{whole(pick, ['1', '3'])}"],
+        "--fail-region": lambda: [
+            f"{','.join(whole(pick, ['0', '2', '4']) for _ in range(pick.integer(2, 5)))}"
+            f"@{whole(pick, ['0', '3'])}"
+        ],
+        "--failure-rate": lambda: [number(pick, ["0.002", "0.05", "0"])],
         "--force": list,
         "--colour": lambda: ["red"],
         "-x": list,
@@ -442,7 +553,8 @@ def plot_line(pick: Pick, paths: Paths, file: str | None = None) -> list[str]:
 def check_line(pick: Pick, paths: Paths) -> list[str]:
     runs = pick.choice(["1", "2"]) if pick.integer(0, 3) else pick.choice(["0", "-1", "x", ""])
     steps = whole(pick, ["0", "5", "40"])
-    argv = ["check", pick.choice(STRATEGIES), "--runs", runs, "--max-steps", steps]
+    strategy = pick.choice([*STRATEGIES, "hostile.py:Loops"])
+    argv = ["check", strategy, "--runs", runs, "--max-steps", steps]
     if pick.integer(0, 1):
         argv += ["--seed", whole(pick, ["0", "5", "9223372036854775807", "18446744073709551616"])]
     return argv
@@ -475,8 +587,8 @@ INTERESTING = [0, 1, -1, 2, 3, 90, 45, 4095, 4096, 1_000_001, 2**31, 2**63 - 1, 
                float("nan"), True, False, "", "x", "0", "optimal", "paper", "mine.py:Mine",
                "shape.png", "sub/dot.png", "scenario.toml", "../shape.png", "/dev/null", "sub",
                ".", "é", "a" * 300, "#zzz", "red", "rgb(999,999,999)", "hsl(999, 999%, 999%)",
-               "a,b", 'a"b', "a\nb", "$x$", [], [1], [1, 2], [1, 2, 3], ["a"], [[1, 2]], {},
-               {"x": 1}]  # fmt: skip
+               "a,b", 'a"b', "a\nb", "$x$", "shape\x00.png", [], [1], [1, 2], [1, 2, 3], ["a"],
+               [[1, 2]], {}, {"x": 1}]  # fmt: skip
 """Values a mutation puts where another was: other types, edges, out of range."""
 
 
@@ -869,7 +981,7 @@ def mutated_state(pick: Pick, path: Path) -> bytes:
         return mutate_bytes(pick, path.read_bytes())
     manifest, arrays = state_members(path)
     how = pick.choice(["value", "value", "array", "array", "array", "drop", "extra", "head",
-                       "deep"])  # fmt: skip
+                       "deep", "raw", "bomb"])  # fmt: skip
     values = manifest["values"]
     if how == "value":
         key = pick.choice(sorted(values))
@@ -887,9 +999,25 @@ def mutated_state(pick: Pick, path: Path) -> bytes:
         arrays[pick.choice(["swarm.extra", "manifest.npy", "swarm.cell.x"])] = np.zeros(3)
     elif how == "head":
         manifest[pick.choice(["format", "version", "values"])] = pick.choice(INTERESTING)
-    else:
+    elif how == "deep":
         values[pick.choice(sorted(values))] = json.loads("[" * 50 + "]" * 50)
-    return state_bytes(manifest, arrays, compressed=pick.integer(0, 1) == 1, deep=how == "deep")
+    elif how == "bomb":  # 64 MB of zeros, which pack to a few kB (issue 29: 3 GB took 3 GB)
+        arrays[pick.choice(sorted(arrays))] = np.zeros((pick.choice([1, 2000]), 4000), np.float64)
+    data = state_bytes(manifest, arrays, compressed=pick.integer(0, 1) == 1, deep=how == "deep")
+    return raw_member(data, pick.choice(["manifest", *sorted(arrays)])) if how == "raw" else data
+
+
+def raw_member(data: bytes, name: str) -> bytes:
+    """A state file with the member `name` stored as plain bytes (its JSON), not as a .npy."""
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        members = {info.filename: archive.read(info) for info in archive.infolist()}
+    manifest = members["manifest.npy"]
+    members[f"{name}.npy"] = manifest[manifest.index(b"{") :]
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w") as archive:
+        for member, content in members.items():
+            archive.writestr(member, content)
+    return out.getvalue()
 
 
 # --- the kinds of case -------------------------------------------------------------------------
@@ -905,8 +1033,16 @@ def image_case(pick: Pick, paths: Paths) -> list[str]:
     return [*argv, "--preview"] if pick.integer(0, 4) == 0 else headless(pick, argv)
 
 
+SCENARIO_FAULTS = ["", "", "failure_rate = 0.002\n", "failure_rate = 0.05\n",
+                   "[[faults]]\nstep = 0\nkind = 'remove'\namount = 1\n",
+                   "[[faults]]\nstep = 2\nkind = 'stall'\namount = 0.3\n"]  # fmt: skip
+"""Faults for the scenario's two groups (issue 29: a group re-formed smaller after a fault
+renumbered the other group's targets, and a robot went for one past the end)."""
+
+
 def scenario_case(pick: Pick, paths: Paths) -> list[str]:
-    (paths.folder / "fuzz.toml").write_bytes(mutated_toml(pick, SCENARIO))
+    text = SCENARIO.replace("[[groups]]", pick.choice(SCENARIO_FAULTS) + "[[groups]]", 1)
+    (paths.folder / "fuzz.toml").write_bytes(mutated_toml(pick, text))
     return headless(pick, ["fuzz.toml", *options(pick, run_options(pick, paths), 1)])
 
 
@@ -921,6 +1057,7 @@ def state_case(pick: Pick, paths: Paths) -> list[str]:
     (paths.folder / "fuzz.state").write_bytes(mutated_state(pick, source))
     argv = ["--load-state", "fuzz.state"]
     extra = pick.choice([[], [], ["--save-state", "fuzz.state"], ["--metrics", "m.json"],
+                         ["--metrics", "fuzz.state"], ["--trace", "fuzz.state", "--force"],
                          ["--trace", "t.csv", "--positions", "p.npz"], ["--strategy", "paper"],
                          ["--record", "r.gif", "--record-size", "64x48"]])  # fmt: skip
     return headless(pick, argv + extra)
@@ -976,6 +1113,30 @@ def special_case(pick: Pick, paths: Paths) -> list[str]:
     return ["plot", "results.csv", "--out", paths.special("")]
 
 
+OUTPUTS = {"--metrics": ".json", "--trace": ".csv", "--positions": ".csv", "--record": ".gif",
+           "--save-state": ".state", "--frames": ""}  # fmt: skip
+
+
+def ending_case(pick: Pick, paths: Paths) -> list[str]:
+    """A run with outputs that runs out of disk (a file size limit) or is sent SIGTERM on the
+    way: whatever it wrote is whole, and it leaves no temporary file."""
+    paths.used_isolated = True
+    if pick.integer(0, 1):
+        # not below what the case's own stdout and stderr take: those are files too
+        paths.ending = Ending(file_limit=pick.choice([2_000, 5_000, 20_000, 200_000]))
+    else:
+        paths.ending = Ending(stop_after=pick.choice([0.0, 0.05, 0.2, 0.5, 1.0, 2.0]))
+    argv = ["shape.png", "--cells", pick.choice(["7", "16", "30"]), "--strategy",
+            pick.choice(["optimal", "paper", "random"]), "--headless", "--max-steps",
+            pick.choice(["5", "50", "400"])]  # fmt: skip
+    for option, suffix in OUTPUTS.items():
+        if pick.integer(0, 1):
+            if option == "--positions":
+                suffix = pick.choice([".csv", ".npz"])
+            argv += [option, paths._new("out") + suffix]
+    return argv
+
+
 def command_case(pick: Pick, paths: Paths) -> list[str]:
     line = pick.choice([run_line, run_line, run_line, preview_line, check_line, other_line,
                         sweep_line, plot_line])  # fmt: skip
@@ -991,8 +1152,9 @@ KINDS: dict[str, Callable[[Pick, Paths], list[str]]] = {
     "sweep file": sweep_case,
     "sweep results": results_case,
     "pipe or device": special_case,
+    "full disk or signal": ending_case,
 }
-"""Every kind of case; "pipe or device" cases are always isolated."""
+"""Every kind of case; "pipe or device" and "full disk or signal" cases are always isolated."""
 
 
 @dataclasses.dataclass
@@ -1001,7 +1163,9 @@ class Case:
     argv: list[str]
     folder: Path
     isolated: bool
-    """It reads a pipe or a device: run it only in a process of its own, with limits."""
+    """It reads a pipe or a device, or is cut short: run it only in a process of its own, with
+    limits."""
+    ending: Ending = Ending()
 
     def command(self) -> str:
         """How to run it again by hand."""
@@ -1013,7 +1177,7 @@ def make_case(pick: Pick, kind: str, material: Path, folder: Path, isolated: boo
     shutil.copytree(material, folder, symlinks=True)
     paths = Paths(pick, folder, isolated)
     argv = KINDS[kind](pick, paths)
-    return Case(kind, argv, folder, paths.used_isolated)
+    return Case(kind, argv, folder, paths.used_isolated, paths.ending)
 
 
 # --- running a case ----------------------------------------------------------------------------
@@ -1127,6 +1291,7 @@ class Forked:
         sys.stderr.flush()
         self.started = time.perf_counter()
         self.deadline = self.started + timeout
+        self.stop_at = case.ending.stop_after
         self.pid = os.fork()
         if self.pid == 0:
             code = 1
@@ -1146,6 +1311,9 @@ class Forked:
             pages = int(statm.read().split()[0])
         limit = pages * os.sysconf("SC_PAGE_SIZE") + MEMORY
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+        if case.ending.file_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (case.ending.file_limit,) * 2)
         if logs is not None:
             tempfile.tempdir = str(logs)
         os.chdir(case.folder)
@@ -1158,6 +1326,10 @@ class Forked:
         """The outcome, once the case has ended (or was ended for taking too long)."""
         done, wait_status = os.waitpid(self.pid, os.WNOHANG)
         status: int | None = None
+        due = self.stop_at is not None and time.perf_counter() > self.started + self.stop_at
+        if not done and due:
+            os.kill(self.pid, signal.SIGTERM)
+            self.stop_at = None
         if done:
             status = os.waitstatus_to_exitcode(wait_status)
         elif time.perf_counter() > self.deadline:
@@ -1243,6 +1415,12 @@ class Named:
         """What a headless run that ends (exit 0 or 3) must have written: path -> option."""
         self.summary = False
         """Whether the command is a headless run, which ends in a summary line."""
+        self.ending = case.ending
+        self.sweep: tuple[Path, Path] | None = None
+        """A sweep's file and its results file."""
+        self.inputs: set[str] = set()
+        """Files the run reads: never changed, even when named as an output with --force
+        (but a state saved over the one it resumes)."""
         found = parsed(case.argv)
         self.command = found[0] if found else None
         if found is None:
@@ -1250,6 +1428,7 @@ class Named:
         command, args = found
         if command in ("run", "edit"):
             self.summary = command == "run" and args.headless and not args.preview
+            self._inputs(case.folder, args)
             for name in ("metrics", "record", "trace", "save_state", "positions"):
                 self._file(getattr(args, name, None))
                 if getattr(args, name, None) is not None and self.summary:
@@ -1261,6 +1440,7 @@ class Named:
                 return
             out = args.out or args.file.with_suffix(".csv")
             self._file(out)
+            self.sweep = (case.folder / args.file, case.folder / out)
             real = Path(os.path.realpath(case.folder / out))
             self._file(real.with_name(f".{real.name}.lock"))
             with contextlib.suppress(OSError):  # not there, or a name too long
@@ -1276,12 +1456,28 @@ class Named:
                 for plot in ("coverage", "steps"):
                     self._file(out / f"{plot}.{form}")
 
+    def _inputs(self, folder: Path, args: Any) -> None:
+        """Note the files a run reads (see `inputs`)."""
+        from swarmshape.session import scenario_images
+
+        read = [args.start if isinstance(args.start, Path) else None, args.path]
+        if args.load_state is not None and args.load_state != args.save_state:
+            read.append(args.load_state)
+        if args.path is not None and args.path.suffix.lower() == ".toml":
+            with contextlib.suppress(OSError, ValueError):
+                read += scenario_images(folder / args.path)
+        module = (args.strategy or "").rpartition(":")[0]
+        read.append(Path(module) if module.endswith(".py") else None)
+        with contextlib.suppress(ValueError):  # a NUL in a name
+            self.inputs = {self._relative(path) for path in read if path is not None}
+
     def _relative(self, path: Path | str) -> str:
         real = os.path.realpath(os.path.join(self.root, path))
         return os.path.relpath(real, self.root)
 
     def _file(self, path: Path | None) -> None:
-        if path is not None:
+        """Note an output file; a symlink loop is no file to write and may not change."""
+        if path is not None and not os.path.islink(os.path.realpath(self.root / path)):
             self.files.add(self._relative(path))
 
     def lost_rows(self) -> bytes | None:
@@ -1297,11 +1493,14 @@ class Named:
         lost = sorted(self._old_lines - now)
         return lost[0] if lost else None
 
-    def unreadable(self) -> str | None:
-        """An output of a finished headless run that is missing or does not read back."""
+    def unreadable(self, *, written: bool = True) -> str | None:
+        """An output of a finished headless run that is missing or does not read back (or, not
+        `written`, one that is there and does not read back: a run cut short)."""
         from swarmshape.io.checkpoint import load_state
 
         for path, option in self.written.items():
+            if not written and not os.path.lexists(path):
+                continue
             try:
                 if option == "metrics":
                     assert "coverage" in json.loads(Path(path).read_text())
@@ -1318,9 +1517,25 @@ class Named:
                 return f"--{option.replace('_', '-')} {path}: {type(error).__name__} {error}"
         return None
 
+    def foreign_row(self) -> str | None:
+        """The key of a row that a sweep which ran to its end left in its results file although
+        it is none of the sweep's runs (another sweep's, or a damaged row taken for one)."""
+        from swarmshape.experiments.results import read_rows
+        from swarmshape.experiments.sweep import read_sweep, run_key
+
+        if self.sweep is None:
+            return None
+        sweep_file, out = self.sweep
+        if not out.exists():
+            return None
+        runs = {run_key(config) for config in read_sweep(sweep_file)}
+        return next((row["run"] for row in read_rows(out) if row["run"] not in runs), None)
+
     def allows(self, relative: str) -> bool:
         """Whether the entry at `relative` may change."""
         real = self._relative(relative)
+        if real in self.inputs:
+            return False
         if relative in self.files or real in self.files:
             return True
         parent, name = os.path.split(relative)
@@ -1348,7 +1563,7 @@ def problems(
     status = outcome.status
     if status is None:
         found.append(f"did not finish in {outcome.seconds:.0f} s")
-    elif status not in (0, 2, 3):
+    elif status not in (0, 2, 3) and (named.ending.stop_after is None or status not in STOPPED):
         found.append(f"exit status {status}")
     elif status == 3 and named.command not in ("run", "check"):
         found.append(f"exit status 3 from {named.command}")
@@ -1369,8 +1584,13 @@ def problems(
     if unasked:
         found.append(f"changed what it was not asked to: {unasked[0]}")
     new = sorted(after.keys() - before.keys())
-    if status == 2 and new:
+    cut_short = named.ending != Ending()
+    if status == 2 and new and not cut_short:
         found.append(f"refused, yet left {new[0]} behind")
+    if cut_short and named.summary and status not in (0, 3):
+        bad = named.unreadable(written=False)
+        if bad:
+            found.append(f"cut short, left an output that does not read back: {bad}")
     temporary = [path for path in after if os.path.basename(path).startswith(TEMP_PREFIX)]
     if temporary:
         found.append(f"left a temporary file: {temporary[0]}")
@@ -1378,9 +1598,16 @@ def problems(
         said = "formed in" if status == 0 else "not formed after"
         if said not in outcome.stdout:
             found.append(f"exit status {status} without '{said}' in the summary")
+        overlaps = OVERLAPS.search(outcome.stdout)
+        if overlaps and overlaps[1] != "0":
+            found.append(f"reported {overlaps[1]} overlaps, which no run has")
         bad = named.unreadable()
         if bad:
             found.append(f"wrote an output that does not read back: {bad}")
+    if named.command == "sweep" and status == 0:
+        foreign = named.foreign_row()
+        if foreign:
+            found.append(f"kept a row of a run the sweep does not have: {foreign[:80]}")
     lost = named.lost_rows()
     if lost:
         found.append(f"{named.keeps_rows}: lost the line {lost!r} without --force")

@@ -94,6 +94,20 @@ def test_the_rules_catch_what_they_promise(tmp_path):
     ]
 
 
+def test_an_input_named_as_an_output_may_still_not_change(tmp_path):
+    """Issue 29, case 1: an output over a file the run reads is a loss even with --force."""
+    (tmp_path / "shape.png").write_text("the user's picture")
+    argv = ["shape.png", "--metrics", "shape.png", "--force"]
+    named = fuzzing.Named(fuzzing.Case("command line", argv, tmp_path, False))
+    before = fuzzing.snapshot(tmp_path)
+    (tmp_path / "shape.png").write_text("{}")
+    found = fuzzing.problems(named, fuzzing.Outcome(2, "", "swarmshape: error: x\n", 0), before,
+                             fuzzing.snapshot(tmp_path))  # fmt: skip
+    assert found == ["changed what it was not asked to: shape.png"]
+    resumed = ["--load-state", "s.state", "--save-state", "s.state"]
+    assert fuzzing.Named(fuzzing.Case("state file", resumed, tmp_path, False)).allows("s.state")
+
+
 @examples(50)
 @given(data=st.data())
 def test_command_lines(material, data):
@@ -140,6 +154,12 @@ def test_mutated_sweep_results(material, data):
 @given(data=st.data())
 def test_pipes_and_devices_are_refused_not_read(material, data):
     holds(material, data, "pipe or device", isolated=True)
+
+
+@examples(8)
+@given(data=st.data())
+def test_runs_cut_short_by_a_full_disk_or_a_signal_leave_whole_files_only(material, data):
+    holds(material, data, "full disk or signal", isolated=True)
 
 
 @pytest.mark.parametrize("crash", fuzzing.FOUND, ids=lambda found: f"{found.where} {found.error}")

@@ -85,8 +85,14 @@ def test_start_positions_come_from_a_csv(tmp_path):
     path = tmp_path / "start.csv"
     path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in cells.tolist()))
     assert read_start_cells(path, world).tolist() == cells.tolist()
+    rows = "".join(f"{x}, {y}\n" for x, y in cells.tolist())
+    path.write_text("\ufeffx, y\n" + rows, encoding="utf-8")  # a BOM and spaces, as sheets write
+    assert read_start_cells(path, world).tolist() == cells.tolist()
     path.write_text("x,y\n0,0\n")
     with pytest.raises(InputError, match="1 start positions for 3 robots"):
+        read_start_cells(path, world)
+    path.write_text("x,y\n" + "0,0\n" * 100_000)  # counted, not kept
+    with pytest.raises(InputError, match="100000 start positions for 3 robots"):
         read_start_cells(path, world)
     target = world.targets[0]
     path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in [*cells[:2].tolist(), target]))

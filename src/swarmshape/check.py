@@ -4,29 +4,60 @@ broke: ``check_strategy("optimal")`` or ``swarmshape check my_strategies.py:Mine
 Each random shape is run twice with the same seed. At every step the robots' squares must not
 overlap (seeds included), stay in the arena, keep their number (robots are conserved except
 those a fault removed), and settled robots must stay where they are; the two runs must be
-identical step by step (randomness from anywhere but ``swarm.rng`` shows up here); and the
+identical step by step (randomness from anywhere but ``swarm.rng`` shows up here; the second
+is saved to a state file and resumed at step `RESUME_AT`, so a strategy whose state does not
+survive that shows up too); and the
 shape must form within the step limit and stay formed for `AFTER_FORMED` steps more (unless a
-fault opened it again).
+fault opened it again). A failure of the strategy's own code (an exception, a write to its
+read-only view, a robot that does not exist, ``sys.exit``) and a step that takes over
+`STEP_SECONDS` (a loop) are problems too, said in plain words; the check stops at the first.
 """
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import hashlib
+import signal
+import tempfile
+import threading
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.audit import overlapping_pairs
+from swarmshape.core.guard import PluginCode
 from swarmshape.core.shape import Shape
+from swarmshape.core.snapshot import Snapshot, SnapshotError, prefixed
 from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
+from swarmshape.errors import PluginError, Stopped
+from swarmshape.io.checkpoint import load_state, save_state
 from swarmshape.runs import Observer, Runner
+
+T = TypeVar("T")
 
 AFTER_FORMED = 50
 """Steps a formed shape is watched for, with its spare robots wandering."""
+STEP_SECONDS = 10.0
+"""How long one step may take. The check's shapes have a few dozen robots, and the built-in
+strategies step them in a millisecond or two on a busy machine: a strategy that takes this long
+is caught in a loop."""
+
+
+RESUME_AT = 5
+"""The step at which the second run of each shape is saved and resumed (its strategy has set
+up whatever it keeps in ``on_start`` by then, and most of the run is still to come)."""
+
+
+class StepTooLong(Stopped):
+    """A step ran past `STEP_SECONDS`."""
 
 
 class InvariantWatch(Observer):
@@ -43,9 +74,15 @@ class InvariantWatch(Observer):
         self._formed = False
         self._faults = 0
         self._dead: np.ndarray | None = None
+        self.failed = False
+        """The run stopped short (see `fail`)."""
+        self._step = -1
 
     def capture(self, swarm: Swarm) -> None:
         step = swarm.step_count
+        if step == self._step:  # seen already (a resumed run is shown again)
+            return
+        self._step = step
         present = swarm.present
         pos = swarm.positions()[present]
         width, height = swarm.world.size
@@ -89,6 +126,11 @@ class InvariantWatch(Observer):
         if len(self.problems) < self.limit:
             self.problems.append(problem)
 
+    def fail(self, problem: str) -> None:
+        """The run could not go on: the strategy's code failed, or a step took too long."""
+        self.problems.append(problem)
+        self.failed = True
+
 
 def _name(index: int, robots: np.ndarray) -> str:
     """Robot or seed number `index` of the squares checked: the robots present, then seeds."""
@@ -111,16 +153,26 @@ class Report:
         head = f"strategy {self.strategy!r}: {self.runs} random shapes, each run twice"
         if self.clean:
             return f"{head}: no problems found"
-        lines = [f"{head}: {len(self.problems)} problems"]
+        count = len(self.problems)
+        lines = [f"{head}: {count} problem{'' if count == 1 else 's'}"]
         return "\n".join(lines + [f"  - {problem}" for problem in self.problems])
 
 
 def check_strategy(
-    strategy: str | type[Strategy], *, runs: int = 20, seed: int = 0, max_steps: int = 20_000
+    strategy: str | type[Strategy],
+    *,
+    runs: int = 20,
+    seed: int = 0,
+    max_steps: int = 20_000,
+    step_seconds: float = STEP_SECONDS,
 ) -> Report:
     """Run `strategy` (a name, ``module:Class``, or a class) on `runs` small random shapes and
-    report every broken invariant."""
-    cls = strategy if isinstance(strategy, type) else strategies.get(strategy)
+    report every broken invariant. Code that fails as it loads is a `PluginError`."""
+    if isinstance(strategy, type):
+        cls = strategy
+    else:
+        with PluginCode.named(strategy).running(" as it was loaded"):
+            cls = strategies.get(strategy)
     report = Report(cls.name, runs)
     shapes = np.random.default_rng(seed)
     for index in range(runs):
@@ -129,7 +181,12 @@ def check_strategy(
         where = (
             f"shape {index} ({len(world.targets)} cells, {world.agents} robots, seed {run_seed})"
         )
-        watches = [watch_run(world, cls, run_seed, max_steps) for _ in "ab"]
+        watches = []
+        for resume_at in (None, RESUME_AT):
+            watches.append(watch_run(world, cls, run_seed, max_steps, step_seconds, resume_at))
+            if watches[-1].failed:
+                report.problems += [f"{where}: {problem}" for problem in watches[-1].problems]
+                return report
         for watch in watches[:1]:
             report.problems += [f"{where}: {problem}" for problem in watch.problems]
         if watches[0].digest.digest() != watches[1].digest.digest():
@@ -139,17 +196,85 @@ def check_strategy(
     return report
 
 
-def watch_run(world: World, cls: type[Strategy], seed: int, max_steps: int) -> InvariantWatch:
-    """Run one strategy on `world` to the end under an `InvariantWatch`."""
+def watch_run(
+    world: World,
+    cls: type[Strategy],
+    seed: int,
+    max_steps: int,
+    step_seconds: float = STEP_SECONDS,
+    resume_at: int | None = None,
+) -> InvariantWatch:
+    """Run one strategy on `world` to the end under an `InvariantWatch`, each step (and the
+    making of the swarm) within `step_seconds`, saved to a file and resumed after step
+    `resume_at` if given."""
     watch = InvariantWatch()
-    runner = Runner(Swarm(world, strategies.create(cls), seed), [watch], max_steps)
-    swarm = runner.finish()
-    if not swarm.complete:
-        coverage = swarm.filled.mean()
-        watch.problems.append(f"not formed after {max_steps} steps (coverage {coverage:.0%})")
-    for _ in range(AFTER_FORMED):
-        runner.step()
+    runner: Runner | None = None
+    try:
+        with _time_limit(step_seconds) as limited:
+            with PluginCode.of(cls).running(" as it was made"):
+                plugin = strategies.create(cls)
+            swarm = limited(lambda: Swarm(world, plugin, seed))
+            runner = Runner(swarm, [watch], max_steps)
+            while not runner.finished:
+                limited(runner.step)
+                if runner.swarm.step_count == resume_at:
+                    resumed = limited(functools.partial(saved_and_resumed, runner.swarm, cls))
+                    runner = Runner(resumed, [watch], max_steps)
+            swarm = runner.swarm
+            runner.close()
+            if not swarm.complete:
+                coverage = swarm.filled.mean()
+                watch.problems.append(
+                    f"not formed after {max_steps} steps (coverage {coverage:.0%})"
+                )
+            for _ in range(AFTER_FORMED):
+                limited(runner.step)
+    except PluginError as error:
+        watch.fail(str(error))
+    except SnapshotError as error:
+        watch.fail(f"step {resume_at}: the run could not be saved and resumed: {error}")
+    except StepTooLong:
+        step = "its start" if runner is None else f"step {runner.swarm.step_count}"
+        watch.fail(
+            f"{step} took over {step_seconds:g} s (is the strategy caught in a loop?); the "
+            "check stopped it"
+        )
     return watch
+
+
+def saved_and_resumed(swarm: Swarm, cls: type[Strategy]) -> Swarm:
+    """`swarm` written to a state file and read back, by a fresh plug-in of `cls`."""
+    with tempfile.TemporaryDirectory(prefix="swarmshape-check-") as folder:
+        path = Path(folder) / "check.state"
+        save_state(path, prefixed("swarm", swarm.snapshot()))  # as a run saves it
+        saved = Snapshot(load_state(path)).part("swarm")
+    return Swarm.restored(saved, strategies.create(cls))
+
+
+@contextlib.contextmanager
+def _time_limit(seconds: float) -> Iterator[Callable[[Callable[[], T]], T]]:
+    """A way to run a call within `seconds`, past which it is stopped with `StepTooLong` (on
+    the main thread, where signals arrive; elsewhere without a limit)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield lambda call: call()
+        return
+
+    def stop(*_: object) -> None:
+        raise StepTooLong
+
+    def limited(call: Callable[[], T]) -> T:
+        signal.setitimer(signal.ITIMER_REAL, seconds, seconds)  # again, if it is swallowed
+        try:
+            return call()
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+
+    previous = signal.signal(signal.SIGALRM, stop)
+    try:
+        yield limited
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def random_world(rng: np.random.Generator, solid: bool = False) -> World:

@@ -1,4 +1,5 @@
-"""The exception types for bad user input: the CLI turns them into a one-line message, exit 2."""
+"""The exception types that end a command with a word rather than a traceback: bad user input
+(one line on stderr, exit 2), a plug-in's own failure (the same), and a stop from outside."""
 
 
 class InputError(ValueError):
@@ -24,3 +25,18 @@ class SettingError(_AboutASetting, InputError):
 
 class SettingWarning(_AboutASetting, UserWarning):
     """A setting was given that changes nothing in this run (the plug-in never reads it)."""
+
+
+class PluginError(InputError):
+    """A plug-in's code failed (raised, wrote where it may only read, named a robot that does
+    not exist, called sys.exit); the message names the plug-in and its line."""
+
+
+class Stopped(BaseException):
+    """The run was stopped from outside its code (a time limit): never a plug-in's failure,
+    wherever it struck."""
+
+
+class Terminated(SystemExit):
+    """The process was asked to end by a signal (SIGTERM, SIGHUP): a run unwinds as after
+    Ctrl+C, so that it leaves no temporary file, and exits with 128 + the signal's number."""

@@ -24,7 +24,7 @@ from swarmshape import strategies
 from swarmshape.config import RunConfig, plugin_options
 from swarmshape.core.faults import Faults
 from swarmshape.core.plugin import Plugin
-from swarmshape.core.snapshot import Snapshot, prefixed
+from swarmshape.core.snapshot import Snapshot, SnapshotError, prefixed
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, build_world, packed_start
 from swarmshape.errors import InputError
@@ -139,7 +139,10 @@ def resume(path: Path, strategy: str | None = None) -> tuple[RunConfig, Swarm]:
             f"never loads code, so name it again to resume: --strategy {config.strategy}"
         )
     plugin = strategies.create(config.strategy, plugin_options(config))
-    return config, Swarm.restored(saved.part("swarm"), plugin)
+    try:
+        return config, Swarm.restored(saved.part("swarm"), plugin)
+    except SnapshotError as error:
+        raise SnapshotError(f"{path}: {error}") from None
 
 
 class Observer:
@@ -167,6 +170,8 @@ class Runner:
         self.swarm = swarm
         self.observers = tuple(observers)
         self.max_steps = RunConfig.max_steps if max_steps is None else max_steps
+        self.stopped = False
+        """Asked to end after the step under way (Ctrl+C), as if out of steps."""
         for observer in self.observers:
             observer.capture(swarm)
 
@@ -177,10 +182,15 @@ class Runner:
     @property
     def finished(self) -> bool:
         """Formed (or a local program gone quiet, or no robot left that can move) with no fault
-        still to come, or out of steps."""
+        still to come, out of steps, or stopped."""
         swarm = self.swarm
         settled = swarm.complete or swarm.driver.quiet or swarm.stranded
-        return (settled and not swarm.faults.ahead(swarm.step_count)) or self.out_of_steps
+        done = settled and not swarm.faults.ahead(swarm.step_count)
+        return done or self.out_of_steps or self.stopped
+
+    def stop(self) -> None:
+        """End the run after the step under way: its observers close on what it reached."""
+        self.stopped = True
 
     def step(self) -> None:
         self.swarm.step()

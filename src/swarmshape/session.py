@@ -7,24 +7,32 @@ onto `Outputs` and `Session` and its exit codes.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
+import signal
 import sys
-from collections.abc import Callable
+import threading
+import tomllib
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmshape import strategies
 from swarmshape.config import RunConfig
+from swarmshape.core.guard import PluginCode
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
+from swarmshape.core.snapshot import SnapshotError
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, blank_world
+from swarmshape.errors import InputError, Terminated
 from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
-from swarmshape.io.files import check_output, distinct_outputs, write_text
+from swarmshape.io.files import check_output, distinct_outputs, identity, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour
 from swarmshape.runs import Observer, Runner, load_world, resume, save, start_cells, start_swarm
 
@@ -52,29 +60,46 @@ class Outputs:
     positions_every: int = 1
     force: bool = False
 
-    def check(self, resumed: Path | None = None) -> None:
-        """Fail before the run, not after it, when an output cannot be written or would
-        replace a file the user did not ask to replace (`force`, or the state being resumed)."""
+    def check(self, inputs: Mapping[Path, str] | None = None, resumed: Path | None = None) -> None:
+        """Fail before the run, not after it, when an output cannot be written, would replace
+        one of the run's `inputs` (path: what it is to the run), or would replace a file the
+        user did not ask to replace (`force`; `--save-state` may replace the state `resumed`,
+        which is one of the inputs: the run goes on where it was saved)."""
         named = [(f"--{o.replace('_', '-')}", getattr(self, o)) for o in OUTPUT_OPTIONS]
         named = [(flag, path) for flag, path in named if path is not None]
         distinct_outputs(named)
+        read = {identity(path): what for path, what in (inputs or {}).items()}
+        read.pop(None, None)
         for flag, path in named:
-            may_replace = self.force or (resumed is not None and _same(path, resumed))
-            check_output(path, flag, may_replace=may_replace, folder=flag == "--frames")
+            continues = flag == "--save-state" and resumed is not None and _same(path, resumed)
+            check_output(
+                path,
+                flag,
+                may_replace=self.force or continues,
+                folder=flag == "--frames",
+                inputs={k: v for k, v in read.items() if not continues or k != identity(resumed)},
+            )
 
-    def observers(self) -> list[Observer]:
-        """Recording and tracing, as asked for."""
+    @contextlib.contextmanager
+    def observers(self) -> Iterator[list[Observer]]:
+        """Recording and tracing, as asked for; discarded (their temporary files removed) if
+        anything fails or stops the run before they are closed, making them included."""
         observers: list[Observer] = []
-        if self.record or self.frames:
-            from swarmshape.ui.record import Recorder  # draws with pygame, offscreen
+        try:
+            if self.record or self.frames:
+                from swarmshape.ui.record import Recorder  # draws with pygame, offscreen
 
-            size = {} if self.record_size is None else {"size": self.record_size}
-            observers.append(Recorder(self.record, self.frames, self.record_every, **size))
-        if self.trace:
-            observers.append(Trace(self.trace, self.trace_every))
-        if self.positions:
-            observers.append(Positions(self.positions, self.positions_every))
-        return observers
+                size = {} if self.record_size is None else {"size": self.record_size}
+                observers.append(Recorder(self.record, self.frames, self.record_every, **size))
+            if self.trace:
+                observers.append(Trace(self.trace, self.trace_every))
+            if self.positions:
+                observers.append(Positions(self.positions, self.positions_every))
+            yield observers
+        except BaseException:
+            for observer in observers:
+                observer.discard()
+            raise
 
 
 @dataclass(frozen=True)
@@ -95,26 +120,76 @@ class Session:
     def start(self) -> dict[str, Any] | None:
         """Run it, write its outputs, print its summary; return its metrics (None when the
         editor closed before any swarm ran)."""
-        self.outputs.check(self.resume)
-        config, world, make_swarm = self._prepare()
-        observers = self.outputs.observers()
-        if self.window or self.editing:
-            swarm = self._show(config, world, make_swarm, observers)
-        else:
-            swarm = make_swarm(world)
-            say(opening_line(swarm, config))
-            runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
-            runner.finish()
-        if swarm is None:
-            return None
-        if self.outputs.save_state:
-            save(swarm, self.outputs.save_state, config)
-        metrics = run_metrics(swarm)
-        if self.outputs.metrics:
-            text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
-            write_text(self.outputs.metrics, text)
+        self.outputs.check(self._inputs(), self.resume)
+        with self._loading():
+            config, world, prepared = self._prepare()
+
+        def make_swarm(on: World) -> Swarm:
+            with self._loading():
+                return prepared(on)
+
+        interrupted = False
+        with ended_by_signals(), self.outputs.observers() as observers:
+            if self.window or self.editing:
+                swarm = self._show(config, world, make_swarm, observers)
+            else:
+                swarm = make_swarm(world)
+                self._can_save(swarm)
+                say(opening_line(swarm, config))
+                runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
+                with stopped_by_ctrl_c(runner):
+                    runner.finish()
+                interrupted = runner.stopped
+            if swarm is None:
+                return None
+            if self.outputs.save_state:
+                save(swarm, self.outputs.save_state, config)
+            metrics = run_metrics(swarm)
+            if self.outputs.metrics:
+                text = json.dumps(metrics, indent=2, allow_nan=False) + "\n"
+                write_text(self.outputs.metrics, text)
         say(summary_line(metrics))
+        if interrupted:  # its outputs hold what it reached; the exit status says it was cut short
+            raise KeyboardInterrupt
         return metrics
+
+    def _can_save(self, swarm: Swarm) -> None:
+        """With --save-state: refuse now, not after the run, a strategy that keeps what a state
+        file cannot hold (it has set its attributes in `on_start` by now)."""
+        if self.outputs.save_state is None:
+            return
+        try:
+            swarm.snapshot()
+        except SnapshotError as error:
+            raise InputError(
+                f"{self.outputs.save_state}: --save-state cannot save this run: {error}"
+            ) from None
+
+    def _loading(self) -> contextlib.AbstractContextManager[None]:
+        """A failure of a strategy's own code (``file.py:Class``) as it is loaded and made is
+        its own, said in one line (see `core.guard`)."""
+        code = self.strategy if self.resume is not None else self.config.strategy
+        if code is None or not strategies.is_code(code):
+            return contextlib.nullcontext()
+        return PluginCode.named(code).running(" as it was loaded")
+
+    def _inputs(self) -> dict[Path, str]:
+        """Every file the run reads, and what it is to the run (for messages)."""
+        if self.resume is not None:
+            found, code = {self.resume: "the state this run resumes"}, self.strategy
+        else:
+            shape, code = self.config.shape_path, self.config.strategy
+            if shape.suffix.lower() == ".toml":
+                found = {shape: "its scenario"}
+                found |= {image: "an image of its scenario" for image in scenario_images(shape)}
+            else:
+                found = {shape: "its image"}
+            if isinstance(self.config.start, Path):
+                found[self.config.start] = "its start cells"
+        module = (code or "").rpartition(":")[0]
+        if module.endswith(".py"):
+            found[Path(module)] = "its strategy's code"
+        return found
 
     def _prepare(self) -> tuple[RunConfig, World, Callable[[World], Swarm]]:
         """The run's description, its first world, and how the run (and the window's restart)
@@ -158,6 +233,45 @@ class Session:
         )
         viewer.run()  # closes the observers, as `Runner.finish` does
         return viewer.swarm
+
+
+@contextlib.contextmanager
+def ended_by_signals() -> Iterator[None]:
+    """SIGTERM and SIGHUP raise `Terminated` for a while, instead of ending the process where
+    it stands (only the main thread receives signals; elsewhere nothing changes)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def end(number: int, _frame: object) -> None:
+        raise Terminated(128 + number)
+
+    previous = {number: signal.signal(number, end) for number in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+@contextlib.contextmanager
+def stopped_by_ctrl_c(runner: Runner) -> Iterator[None]:
+    """A first Ctrl+C ends `runner`'s run after the step under way, so that its outputs and
+    summary keep what it reached; a second one interrupts at once (and keeps nothing)."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield  # signals reach only the main thread; an ignored Ctrl+C stays ignored
+        return
+
+    def stop(_number: int, _frame: object) -> None:
+        runner.stop()
+        signal.signal(signal.SIGINT, previous)
+
+    signal.signal(signal.SIGINT, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def say(line: str) -> None:
@@ -242,4 +356,16 @@ def _count(number: int, thing: str) -> str:
 
 
 def _same(path: Path, other: Path) -> bool:
-    return path.resolve() == other.resolve()
+    return path.resolve() == other.resolve() or identity(path) == identity(other) is not None
+
+
+def scenario_images(path: Path) -> list[Path]:
+    """The images a scenario file names (those it names as text; the scenario's reader checks
+    the rest, and has already read this file's settings)."""
+    try:
+        groups = tomllib.loads(path.read_text(encoding="utf-8")).get("groups")
+    except (OSError, ValueError, RecursionError):
+        return []
+    tables = groups if isinstance(groups, list) else []
+    shapes = [table.get("shape") for table in tables if isinstance(table, dict)]
+    return [path.parent / shape for shape in shapes if isinstance(shape, str)]

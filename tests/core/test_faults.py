@@ -352,6 +352,19 @@ def test_events_parse_from_plain_values_and_text():
             events_from_values(bad, "faults")
 
 
+@pytest.mark.parametrize("text", ["0.2@\u00b2", "\u00b2@3", "0.2@\u2460", "1\u00b9@3"])
+def test_digits_that_int_refuses_are_one_clear_error(text):
+    """Issue 29, case 12: a superscript or circled digit passed str.isdigit, which int()
+    then refused with a traceback (--fail, --stall, --fail-region, scenario and sweep values)."""
+    with pytest.raises(FaultError, match="expects"):
+        parse_event(text, "stall", "--stall")
+    with pytest.raises(FaultError, match="expects"):
+        parse_region(f"1,2,{text.replace('@', ',')}@3" if "@3" in text else f"1,2,3,{text}")
+    with pytest.raises(FaultError, match=r"faults\[0\]"):
+        events_from_values([text], "faults")
+    assert parse_event("0.2@\u0663", "remove", "--fail").step == 3  # a digit int() reads
+
+
 def test_a_run_does_not_end_before_its_last_fault():
     world = world_of(BLOCK, BLOCK.sum() + 6)
     swarm = Swarm(world, create("optimal"), 1, faults=Faults((FaultEvent(400, "remove", 3),)))
@@ -450,3 +463,16 @@ def test_on_loss_is_set_from_the_command_line_a_scenario_and_a_sweep(tmp_path, c
     assert main([str(square), "--seed", "1", *args]) == 0
     assert json.loads(metrics.read_text())["scale"] == float(rows["rescale"]["scale"])
     assert "left open" not in capsys.readouterr().out
+
+
+def test_a_wanderer_left_in_a_hole_of_the_re_formed_shape_takes_the_papers_move():
+    """Issue 29, case 7: the horse re-formed at scale 0.93 after a fifth of its robots went,
+    and a robot whose cell became a hole of the smaller shape wandered there with nowhere to
+    step aside; the paper's one mover needed that cell to reach its target and waited behind it
+    for good (65.9 % coverage for 200,000 steps). A wanderer that cannot step aside takes the
+    mover's target, under every motion, and the mover wanders in its place."""
+    config = configure(SHAPES / "horse.png", cells=14, strategy="paper", seed=2, on_loss="rescale",
+                       faults=(FaultEvent(4000, "remove", 0.2),))  # fmt: skip
+    swarm = Runner(start_swarm(config, load_world(config)), max_steps=12_000).finish()
+    assert swarm.complete and swarm.world.groups[0].shape.scale < 1
+    assert swarm.faults.log[0]["recovery_steps"] is not None

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from swarmshape.core.local import Memory, Program, ProgramError, Schema, Slot, _link_up
 from swarmshape.core.perception import Perception, Senses, neighbours
 from swarmshape.core.shape import Pose, Shape
+from swarmshape.core.states import SETTLED
 from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import run
@@ -201,3 +202,34 @@ def test_a_message_schema_packs_and_reads_fields_by_name():
     assert fields.state.tolist() == [1, 2] and fields.position.tolist() == [[3, 4], [5, 6]]
     with pytest.raises(TypeError, match="exactly the fields state, position, hops"):
         schema.pack(state=[1], position=[[0, 0]])
+
+
+class Still(Program):
+    """Robots that never move and never say they are done."""
+
+    name = "still"
+    description = "test: stay"
+
+    def act(self, sense: Perception, memory: Memory, rng: np.random.Generator):
+        return np.zeros(len(sense), dtype=np.int64), np.zeros((len(sense), 0), dtype=np.int64)
+
+
+class StillDone(Still):
+    """The same, every other robot done for good."""
+
+    name = "still-done"
+
+    def finished(self, memory: Memory) -> np.ndarray:
+        return np.arange(len(memory)) % 2 == 0
+
+
+def test_a_program_that_does_not_say_when_robots_are_done_fills_the_targets_they_rest_on():
+    """Issue 29, case 19: the README's Gather (no finished()) reported coverage 0 % while its
+    robots rested on the shape."""
+    world = world_of(np.ones((1, 4), dtype=bool), 4, arena=(12, 6))
+    start = np.array([*world.targets[:3].tolist(), world.start_cells()[0].tolist()])
+    for program, filled, settled in ((Still(), 3, 0), (StillDone(), 2, 2)):
+        swarm = Swarm(world, program, seed=1, start=start)
+        run(swarm, max_steps=3)
+        assert swarm.filled.sum() == filled, program.name
+        assert (swarm.state == SETTLED).sum() == settled, program.name

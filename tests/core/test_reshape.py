@@ -78,3 +78,36 @@ def test_repeated_changes_complete_even_over_wandering_agents_and_pending_messag
         assert swarm.complete, f"change {change}: coverage {swarm.filled.mean():.2f}"
         swarm.reshape(0, shapes[change % 2])
     assert swarm.overlap_total == 0
+
+
+def test_a_shape_with_more_cells_than_robots_is_refused_in_one_line_and_nothing_changes():
+    """Issue 29, cases 6 and 17: a live change to 15 cells for 4 robots went ahead, never
+    formed, and made the metrics raise at the end."""
+    from swarmshape.core.metrics import run_metrics
+
+    swarm = make_swarm(np.ones((1, 4), dtype=bool), seed=1, strategy="optimal")
+    run(swarm, max_steps=200)
+    before = swarm.world
+    with pytest.raises(WorldError) as error:
+        swarm.reshape(0, Shape(np.ones((3, 5), dtype=bool)))
+    assert str(error.value) == (
+        "group 'test': the new shape has 15 cells for the 4 robots that can move: short by 11; "
+        "draw fewer cells, or fit it with shape.fitted(4)"
+    )
+    assert swarm.world is before and swarm.complete
+    assert run_metrics(swarm)["coverage"] == 1.0
+
+
+def test_after_a_fault_a_change_is_measured_against_the_robots_left():
+    """Issue 29, case 17: after a fault the editor offered the robots the run began with, and
+    a shape for them sat at 83 % for good."""
+    swarm = make_swarm(BEFORE, agents=36, seed=2, strategy="greedy")
+    run(swarm, max_steps=2_000)
+    swarm.fail(np.arange(6))
+    run(swarm, max_steps=swarm.step_count + 5_000)
+    assert swarm.complete and swarm.movable(0) == 30
+    with pytest.raises(WorldError, match="36 cells for the 30 robots that can move: short by 6"):
+        swarm.reshape(0, Shape(BEFORE))
+    swarm.reshape(0, Shape(BEFORE).fitted(30))
+    run(swarm, max_steps=swarm.step_count + 5_000)
+    assert swarm.complete

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape, ShapeError
-from swarmshape.core.world import GroupSpec, WorldError, build_world
+from swarmshape.core.world import GroupSpec, WorldError, build_world, cells_at
 from tests.conftest import grid_from
 
 L_SHAPE = grid_from("""
@@ -117,3 +117,78 @@ def test_a_solid_shape_stays_solid_when_fitted_to_fewer_robots():
     for agents in range(1, shape.count):  # shrunk to 5 cells across, a plain resample is not
         fitted = shape.fitted(agents)
         assert fitted.is_solid and fitted.count <= agents
+
+
+@pytest.mark.parametrize("x", [10**20, -(10**20), 2**63, 25_000_001])
+def test_a_pose_beyond_any_arena_is_refused(x):
+    """Issue 29, case 12: a scenario pose beyond int64 made object arrays, was accepted, and
+    the automatic arena then shifted it away (ignored without a word)."""
+    with pytest.raises(ShapeError, match="lies beyond any arena"):
+        Pose(x, 0)
+    with pytest.raises(ShapeError, match="lies beyond any arena"):
+        Pose(0, x, 90)
+    assert Pose(25_000_000, -25_000_000).x == 25_000_000
+
+
+def test_a_shape_without_cells_is_refused_wherever_a_world_is_made():
+    """Issue 29, case 12: an all-empty grid with agents=1 built a world, and the first step
+    (vector_env's reset) raised an IndexError."""
+    empty = Shape(np.zeros((3, 3), dtype=bool))
+    with pytest.raises(WorldError, match="group 'g': its shape has no cells"):
+        build_world([GroupSpec("g", empty, (1, 2, 3), 1)])
+    world = build_world([GroupSpec("g", Shape(grid_from("##")), (1, 2, 3))])
+    with pytest.raises(WorldError, match="its shape has no cells"):
+        world.reshaped(0, empty, world.groups[0].pose)
+
+
+def test_a_world_and_its_shapes_are_read_only():
+    """Issue 29, case 15: a strategy wrote `swarm.targets[0] = ...` and
+    `swarm.world.seeds[:] = 0` through its SwarmView, and the run reported 1,800 overlaps; the
+    README says the view is read-only. The world's arrays are read-only where they are made."""
+    grid = grid_from("##\n#.")
+    world = build_world([GroupSpec("g", Shape(grid), (1, 2, 3))])
+    group = world.groups[0]
+    arrays = [world.targets, world.target_group, world.seeds, group.targets, group.seeds,
+              group.frame_cells, group.shape.grid]  # fmt: skip
+    for array in arrays:
+        with pytest.raises(ValueError, match="read-only"):
+            array[0] = 1
+    grid[0, 1] = False  # the shape kept its own copy
+    assert group.shape.grid[0, 1]
+
+
+def test_fitting_a_wide_shape_to_few_robots_resamples_it_a_few_times_not_once_per_side(
+    monkeypatch,
+):
+    """Issue 29, case 8: --cells 2000 --agents 5 took 3 minutes (--cells 3000 over 15): the
+    fit resampled the whole grid once for every side from 1,999 down. Its cost is now a few
+    dozen resamplings, and it finds the copy the side-by-side search found."""
+    from swarmshape.core import shape as module
+
+    calls = []
+    real = module.resample
+
+    def counted(fraction, side):
+        calls.append(side)
+        return real(fraction, side)
+
+    monkeypatch.setattr(module, "resample", counted)
+    yy, xx = np.mgrid[:100, :200]
+    wide = Shape(((xx - 100) / 100) ** 2 + ((yy - 50) / 50) ** 2 <= 1)  # an ellipse
+    for agents in (5, 700, wide.count - 1):
+        calls.clear()
+        fitted = wide.fitted(agents)
+        assert len(calls) <= 30, len(calls)
+        assert 0 < fitted.count <= agents
+        bigger = next(s for s in (wide._copy(side, False) for side in range(199, 0, -1))
+                      if s.count <= agents)  # fmt: skip
+        assert (fitted.count, fitted.scale) == (bigger.count, bigger.scale)
+
+
+def test_start_cells_picked_by_place_are_those_of_the_whole_list():
+    world = build_world([GroupSpec("g", Shape(grid_from("###\n#.#")), (1, 2, 3), 40)])
+    every = world.start_cells()
+    rng = np.random.default_rng(3)
+    chosen = rng.choice(len(every), 25, replace=False)
+    assert np.array_equal(cells_at(world.start_mask(), chosen), every[chosen])
+    assert np.array_equal(cells_at(world.start_mask(), np.arange(len(every))), every)

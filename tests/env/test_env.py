@@ -367,3 +367,36 @@ def test_the_reward_follows_a_shape_a_fault_re_formed_smaller():
     swarm.fail(np.arange(5))  # too few left: the shape is re-formed with fewer cells
     assert len(swarm.world.targets) < 9
     assert reward(swarm).shape == (9,)
+
+
+@pytest.mark.parametrize("make", [learn.vector_env, learn.parallel_env])
+def test_an_empty_grid_is_one_clear_error_not_an_index_error(make):
+    """Issue 29, case 12: an all-empty grid with agents=1 raised an IndexError at reset."""
+    with pytest.raises(InputError, match="its shape has no cells"):
+        make(np.zeros((3, 3), dtype=bool), agents=1).reset(seed=0)
+
+
+@pytest.mark.parametrize("make", [learn.vector_env, learn.parallel_env])
+@pytest.mark.parametrize("shape", ["file", "grid"])
+def test_a_packed_start_is_a_layout_not_a_file(make, shape, shapes):
+    """Issue 29, case 14: start="packed" said "packed: no such file"."""
+    grid = np.ones((3, 4), dtype=bool)
+    env = make(str(shapes / "line.png") if shape == "file" else grid, start="packed")
+    env.reset(seed=0)
+    swarm = (env.episode if hasattr(env, "episode") else env.unwrapped.episode).swarm
+    seeds = swarm.world.seeds
+    near = np.abs(swarm.cell[:, None, :] - seeds[None, :, :]).sum(axis=2).min(axis=1)
+    assert near.max() <= swarm.world.agents  # a block against the seeds, not scattered
+
+
+@pytest.mark.parametrize("action", [1.9, "3", True, np.float32(2.0), [1, 2], None])
+def test_parallel_env_takes_whole_numbers_only_as_vector_env_does(action):
+    """Issue 29, case 14: parallel_env took 1.9 as 1 and "3" as 3, where vector_env refused
+    them."""
+    env = learn.parallel_env(np.ones((2, 3), dtype=bool))
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="an action is a whole number"):
+        env.step({env.agents[0]: action})
+    with pytest.raises(ValueError, match="no agent 'robot_99999'"):
+        env.step({"robot_99999": 1})
+    env.step({agent: np.int64(1) for agent in env.agents})  # numpy integers are fine

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import re
 import threading
@@ -209,6 +210,7 @@ def test_a_dollar_in_a_setting_is_drawn_as_it_is(results, tmp_path, monkeypatch)
     column = rows[0].index("config.strategy")
     for row in rows[1:]:
         row[column] = row[column].replace("optimal", r"$\frac{1}{0$")
+        row[0] = row[0].replace('"optimal"', json.dumps(r"$\frac{1}{0$"))  # its run key agrees
     (tmp_path / "dollar.csv").write_text(csv_text(rows))
     monkeypatch.setitem(matplotlib.rcParams, "svg.fonttype", "none")
     plot_results(tmp_path / "dollar.csv", tmp_path / "plots", ("svg",))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import resource
 import signal
@@ -205,3 +207,61 @@ def test_a_long_coverage_curve_reads_back(tiny, swept):
     out.write_text(out.read_text().replace(curve, long_curve, 1))
     assert json.loads(read_rows(out)[0]["coverage_curve"]) == [0.5] * 40_000
     assert sweep(read_sweep(tiny), out, tiny.parent, workers=1) == 0
+
+
+@pytest.mark.parametrize(
+    ("before", "after"),
+    [('""seed"": 1', '""seed"": 7'), ('""strategy"": ""optimal""', '""strategy"": ""random""')],
+    ids=["seed", "strategy"],
+)
+def test_a_row_whose_run_key_disagrees_with_its_settings_is_damaged(tiny, swept, before, after):
+    """Issue 29, case 4: a row whose run key was changed was kept as a foreign run on resume
+    (9 rows for an 8-run sweep); its settings columns still said which run it was."""
+    out, whole = swept
+    lines = whole.splitlines(keepends=True)
+    line = next(i for i, text in enumerate(lines) if before.encode() in text)
+    lines[line] = lines[line].replace(before.encode(), after.encode(), 1)
+    out.write_bytes(b"".join(lines))
+    with pytest.raises(InputError) as error:
+        sweep(read_sweep(tiny), out, tiny.parent, workers=1)
+    message = f"{out}: line {line + 1} is damaged (its run key does not match its settings)"
+    assert str(error.value).startswith(message)
+    assert out.read_bytes() == b"".join(lines)
+
+
+def test_a_deeply_nested_run_key_is_damaged_not_a_crash(tiny, swept):
+    """Found by the fuzz: a run key nested 5,000 deep was a RecursionError."""
+    out, whole = swept
+    lines = whole.decode().splitlines(keepends=True)
+    fields = next(csv.reader([lines[2]]))
+    fields[0] = "[" * 5000 + "]" * 5000
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerow(fields)
+    lines[2] = buffer.getvalue()
+    out.write_text("".join(lines))
+    with pytest.raises(InputError, match="line 3 is damaged"):
+        sweep(read_sweep(tiny), out, tiny.parent, workers=1)
+    with pytest.raises(InputError, match="line 3 is damaged"):
+        read_rows(out)
+
+
+def test_a_file_with_runs_of_another_sweep_is_not_resumed_into(tiny, swept):
+    """Issue 29, case 4: a sweep whose --out was another sweep's file, with the same keys but
+    one value changed, merged both silently."""
+    from swarmshape.experiments.sweep import run_key
+
+    out, whole = swept
+    runs = [run_key(config) for config in read_sweep(tiny)]
+    other = [key.replace('"seed": 1', '"seed": 2') for key in runs]
+    settings = [f"config.{name}" for name in sorted(json.loads(runs[0]))]
+    with open_results(out, settings, runs=runs[:6] + runs):  # a sweep of more seeds: fine
+        pass
+    with pytest.raises(InputError) as error, open_results(out, settings, runs=other):
+        pass
+    assert str(error.value) == (
+        f"{out}: line 3 is a run this sweep does not have (seed 1); write to a new --out, or "
+        "add --force to start it over"
+    )
+    with open_results(out, settings, runs=other, force=True) as results:
+        assert results.done == set()
+    assert out.read_bytes() == whole

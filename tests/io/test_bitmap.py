@@ -214,3 +214,24 @@ def test_a_png_claiming_gigabytes_is_one_clear_error_under_a_memory_limit(tmp_pa
         f"swarmshape: error: {path}: cannot read image (it asks for more memory than there is; "
         "damaged?)\n"
     )
+
+
+@pytest.mark.parametrize("size, out", [(13, 6), (15, 14), (19, 10), (25, 18), (1000, 7)])
+def test_shrinking_averages_each_box_as_pillows_box_filter(size, out):
+    """Pillow's boxes may leave a pixel between two boxes out: each box is summed on its own."""
+    from swarmshape.core.grid import _box_average
+
+    pixels = np.random.default_rng(size).random((3, size)).astype(np.float32)
+    pillow = np.stack([np.asarray(Image.fromarray(row[None]).resize((out, 1), Image.BOX))[0]
+                       for row in pixels])  # fmt: skip
+    assert np.allclose(_box_average(pixels, out, axis=1), pillow, atol=1e-6)
+
+
+def test_a_shape_that_vanishes_at_the_default_size_names_the_size(tmp_path):
+    """Issue 29, case 13: without --cells this said "the shape vanishes at --cells None"."""
+    from swarmshape.io.bitmap import DEFAULT_CELLS
+
+    image = np.full((400, 400), 255)
+    image[0, 0] = image[-1, -1] = 0  # two dots far apart: each a sliver of its cell
+    with pytest.raises(BitmapError, match=f"vanishes at {DEFAULT_CELLS} cells across"):
+        load_grid(write(tmp_path / "dots.png", image))

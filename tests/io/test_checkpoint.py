@@ -15,12 +15,14 @@ import pytest
 
 from swarmshape.cli import main
 from swarmshape.config import configure
+from swarmshape.core.faults import LOG_KEYS
 from swarmshape.core.metrics import run_metrics
 from swarmshape.errors import InputError
 from swarmshape.io.checkpoint import PICKLE_HEADER, load_state
 from swarmshape.runs import build, resume, run, save
 from swarmshape.strategies import available
 from tests.conftest import SHAPES
+from tests.fuzzing import changed_state, state_bytes, state_members
 
 
 def config_for(strategy: str):
@@ -241,4 +243,111 @@ def test_a_damaged_array_header_is_a_damaged_state(tmp_path, edit):
     path, _ = saved_state(tmp_path)
     with_array_header(path, edit)
     with pytest.raises(InputError, match="damaged state file"):
+        load_state(path)
+
+
+@pytest.mark.parametrize("member", ["manifest.npy", "swarm.cell.npy"])
+def test_a_member_of_raw_bytes_is_a_damaged_state(tmp_path, member):
+    """Issue 29, case 12: a member that is not a .npy array (numpy hands it over as bytes) was
+    an AttributeError when it was the manifest."""
+    path, _ = saved_state(tmp_path)
+    with zipfile.ZipFile(path) as archive:
+        members = {info.filename: archive.read(info) for info in archive.infolist()}
+    members[member] = members["manifest.npy"][members["manifest.npy"].index(b"{") :]
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    with pytest.raises(InputError, match="damaged state file"):
+        load_state(path)
+
+
+CRAFTED = {
+    "overlaps counted": (lambda m: {"swarm.overlap_total": 136}, "overlap_total is 136"),
+    "a step beyond any count": (lambda m: {"swarm.step": 10**100}, "swarm.step is 1000"),
+    "completed after the step": (lambda m: {"swarm.completed_at": [10**6]}, "completed_at holds"),
+    "plans of another length": (
+        lambda m: {"swarm.driver.strategy._planned": np.zeros(3, dtype=np.int64)},
+        "_planned does not hold one whole number per robot",
+    ),
+    "plans past the targets": (
+        lambda m: {"swarm.driver.strategy._planned": m["swarm.driver.strategy._planned"] + 10**6},
+        "_planned names a target that does not exist",
+    ),
+    "movers without targets": (
+        lambda m: {"swarm.driver.target": np.full_like(m["swarm.driver.target"], -1)},
+        "target disagrees with the robots' states",
+    ),
+    "targets filled by nobody": (
+        lambda m: {"swarm.filled": np.ones_like(m["swarm.filled"])},
+        "filled marks a target that no settled robot rests on",
+    ),
+    "a fault log of words": (
+        lambda m: {"swarm.faults.log": [dict.fromkeys(LOG_KEYS, "x")]},
+        "log is not a list of fault entries",
+    ),
+    "a saved setting out of range": (  # was blamed on --failure-rate, with no file named
+        lambda m: {"config.failure_rate": 2.0},
+        "s.state: failure_rate must be a number from 0 up to",
+    ),
+    "a value named with its file": (
+        lambda m: {"swarm.wander_rate": 7.0},
+        "s.state: damaged state: swarm.wander_rate is 7.0",
+    ),
+    "robots lost that are there": (
+        lambda m: {"swarm.faults.lost_at": np.zeros_like(m["swarm.faults.lost_at"])},
+        "lost_at disagrees with which robots are lost",
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CRAFTED))
+def test_a_crafted_value_out_of_range_is_refused_before_the_first_step(tmp_path, name):
+    """Issue 29, case 12: a state whose values were out of range, with a checksum made to
+    match, crashed at the first step or reported "formed ... 136 overlaps" and "formed in
+    10^100 steps" (exit 0). Every value is now checked against the rest on load."""
+    path, _ = saved_state(tmp_path)
+    _, members = state_members(path)
+    change, message = CRAFTED[name]
+    path.write_bytes(changed_state(path, change(members)))
+    with pytest.raises(InputError, match=re.escape(message)):
+        resume(path)
+
+
+def test_a_state_member_that_unpacks_past_its_run_is_refused_before_it_is_unpacked(
+    tmp_path, monkeypatch
+):
+    """Issue 29, case 10: a 2.9 MB state with a member that unpacked to 3 GB took 3 GB and 9 s
+    before it was refused, though a state's sizes are promised to be checked before anything is
+    decompressed. The sizes its arrays declare are now held against what a run of the world
+    its manifest describes can keep, before any array is read."""
+    import numpy.lib.format as npy
+
+    path, _ = saved_state(tmp_path)
+    manifest, members = state_members(path)
+    cells = int(np.prod(manifest["values"]["swarm.world.size"]))
+    members["swarm.driver.planner.rows"] = np.zeros((20_000, cells))  # zeros pack to nothing
+    path.write_bytes(state_bytes(manifest, members))
+    assert path.stat().st_size < 1_000_000
+    read = []
+
+    def reading(*args, **kwargs):
+        read.append(args[0].name)
+        return real(*args, **kwargs)
+
+    real = npy.read_array
+    monkeypatch.setattr(npy, "read_array", reading)
+    with pytest.raises(InputError, match=r"s\.state: state file too large for its run \("):
+        load_state(path)
+    assert read == ["manifest.npy"]  # and no array
+
+
+@pytest.mark.parametrize(
+    "version, message",
+    [('"3"', "its format version is not a number"), ("99", "format version 99; this")],
+)
+def test_a_state_of_another_version_says_which(tmp_path, version, message):
+    """Issue 29, case 13: a version of '3' read "format version '3'; this reads version 3"."""
+    path, _ = saved_state(tmp_path)
+    rewritten(path, lambda text: re.sub(r'"version": \d+', f'"version": {version}', text))
+    with pytest.raises(InputError, match=re.escape(message)):
         load_state(path)

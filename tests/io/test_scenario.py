@@ -41,6 +41,10 @@ def write(tmp_path, text):
         ("[[groups]]\nshape = 'line.png'\ncolour = 'rgb(999,999,999)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'hsl(999, 999%, 999%)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\npose = {x = 1, z = 2}\n", "unknown key 'z'"),
+        (  # was the Pose's own words, with no file named
+            "[[groups]]\nshape = 'line.png'\npose = {x = 1, y = 2, rotation = 45}\n",
+            r"s\.toml: groups\[0\]\.pose: rotation must be a multiple of 90 degrees, got 45",
+        ),
         ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "arena must be two whole numbers"),
         ("order = 'random'\n[[groups]]\nshape = 'line.png'\n", "order is an option of paper"),
         ("[options]\norder = 'random'\n[[groups]]\nshape = 'line.png'\n", "not of optimal"),

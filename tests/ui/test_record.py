@@ -39,6 +39,7 @@ def test_every_frame_shows_its_step_and_coverage(tmp_path):
     while swarm.step_count < 10:
         swarm.step()
     recorder.capture(swarm)
+    recorder.close(swarm)
     assert caption(swarm) == f"step 10   coverage {100 * swarm.filled.mean():.1f}%"
     first, last = frames_of(tmp_path)
     strip = slice(0, 12)

@@ -185,6 +185,21 @@ def click(view: Viewer, kind: int, pixel: tuple[int, int]) -> None:
     view.tick()
 
 
+def formed_under_optimal(shape: np.ndarray, agents: int, folder) -> Viewer:
+    """A window whose swarm has formed `shape` with `agents` robots, under `optimal`."""
+    view = Viewer(
+        lambda world: Swarm(world, create("optimal"), 3),
+        world_of(shape, agents),
+        title="block.png",
+        size=(640, 400),
+        fps=0,
+        screenshots=folder,
+    )
+    while not view.swarm.complete:
+        view.tick()
+    return view
+
+
 def test_the_fault_tool_removes_a_clicked_robot_and_a_dragged_rectangle(tmp_path):
     block = grid_from("""
     ########
@@ -192,17 +207,8 @@ def test_the_fault_tool_removes_a_clicked_robot_and_a_dragged_rectangle(tmp_path
     ########
     ########
     """)
-    view = Viewer(
-        lambda world: Swarm(world, create("optimal"), 3),
-        world_of(block, 40),
-        title="block.png",
-        size=(640, 400),
-        fps=0,
-        screenshots=tmp_path,
-    )
+    view = formed_under_optimal(block, 40, tmp_path)
     try:
-        while not view.swarm.complete:
-            view.tick()
         press(view, pygame.K_SPACE)
         press(view, pygame.K_x)
         assert view.fault_tool and "FAULT TOOL" in view.status()
@@ -368,3 +374,19 @@ def test_the_hud_fits_the_window_at_every_size(viewer, size):
     shown = sum(len(row) for row in keys)
     assert shown == (len(legend(viewer.swarm)) if size[1] >= 400 else 0)
     assert area.height >= 0.45 * size[1]
+
+
+def test_a_live_edit_the_robots_left_cannot_fill_is_refused_in_the_editor(tmp_path):
+    """Issue 29, cases 6 and 17: after a fault, handing over the shape the run began with went
+    ahead with more cells than robots; it never formed, and the metrics raised at quit."""
+    view = formed_under_optimal(grid_from("####\n####"), 8, tmp_path)
+    try:
+        first = view.swarm.world.targets.copy()
+        view.swarm.fail(np.arange(3))
+        view.start_editing()
+        view.editor.canvas.grid[first[:, 0], first[:, 1]] = True  # the first 8 cells again
+        view.finish_editing()
+        assert view.editing and "for the 5 robots that can move: short by 3" in view.editor.message
+        assert len(view.swarm.world.targets) <= 5  # as re-formed smaller after the fault
+    finally:
+        pygame.quit()

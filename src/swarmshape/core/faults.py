@@ -126,7 +126,7 @@ def parse_event(text: str, kind: str, option: str) -> FaultEvent:
     """``AMOUNT@STEP`` (a fraction like 0.2, or a number of robots like 50) as an event."""
     amount, step = _split(text, option, "FRACTION@STEP, e.g. 0.2@300")
     try:
-        value: float | int = int(amount) if amount.strip().isdigit() else float(amount)
+        value: float | int = int(amount) if amount.strip().isdecimal() else float(amount)
     except ValueError:
         raise FaultError(f"{option} expects FRACTION@STEP, e.g. 0.2@300, got {text!r}") from None
     try:
@@ -201,8 +201,11 @@ def events_from_values(values: Any, where: str) -> tuple[FaultEvent, ...]:
 
 
 def _split(text: str, option: str, form: str) -> tuple[str, int]:
+    """`text`'s part before its last @, and the step after it. A step is decimal digits, the
+    ones int() reads (str.isdigit also takes superscripts and circled digits, which it does
+    not)."""
     head, at, step = text.rpartition("@")
-    if not at or not step.strip().isdigit() or not head:
+    if not at or not step.strip().isdecimal() or not head:
         raise FaultError(f"{option} expects {form}, got {text!r}")
     return head, int(step)
 
@@ -264,17 +267,39 @@ class Faults:
         }
 
     @classmethod
-    def restored(cls, saved: Snapshot, robots: int) -> Faults:
+    def restored(cls, saved: Snapshot, robots: int, step: int) -> Faults:
+        """The faults `snapshot` saved, of a run at `step`: every value in range."""
         try:
             events = events_from_values(saved.value("events"), "faults.events")
             faults = cls(events, saved.number("rate", 0, 1), robots)
         except FaultError as error:
             raise saved.error("events", f"are not fault events ({error})") from None
-        faults.lost_at = saved.array("lost_at", np.int64, (robots,), -1)
+        faults.lost_at = saved.array("lost_at", np.int64, (robots,), -1, step)
         log = saved.value("log")
-        if not isinstance(log, list) or not all(
-            isinstance(entry, dict) and set(entry) == set(LOG_KEYS) for entry in log
-        ):
+        if not isinstance(log, list) or not all(_logged(entry, robots, step) for entry in log):
             raise saved.error("log", "is not a list of fault entries")
         faults.log = [dict(entry) for entry in log]
         return faults
+
+
+def _logged(entry: Any, robots: int, step: int) -> bool:
+    """Whether `entry` is a fault's log entry (see `Swarm.fail`) of a run of `robots` at
+    `step`: each value of its kind and in range, and its recovery after its fault."""
+    if not isinstance(entry, dict) or set(entry) != set(LOG_KEYS):
+        return False
+    struck, recovered = entry["step"], entry["recovered_at"]
+    shares = ("coverage_before", "coverage_after", "scale")
+    if not (
+        _whole(struck, 0, step)
+        and isinstance(entry["kind"], str)
+        and _whole(entry["robots"], 0, robots)
+        and all(type(entry[key]) in (int, float) and 0 <= entry[key] <= 1 for key in shares)
+    ):
+        return False
+    if recovered is None:
+        return entry["recovery_steps"] is None
+    return _whole(recovered, struck, step) and entry["recovery_steps"] == recovered - struck
+
+
+def _whole(value: Any, low: int, high: int) -> bool:
+    return type(value) is int and low <= value <= high

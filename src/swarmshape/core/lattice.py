@@ -28,7 +28,7 @@ class Lattice:
         """Key offset per direction index (see `swarmshape.core.motion.STEPS`)."""
         self.holder = np.full((width + 2) * (height + 2), WALL, dtype=np.int64)
         self.grid[...] = FREE
-        self.owner = np.full(len(self.holder), -1, dtype=np.int64)
+        self.owner = np.full(len(self.holder), -1, dtype=np.int32)  # groups: a few at most
         """Per key: the group whose target is there, or -1."""
         self.queued = np.full(len(self.holder), FREE, dtype=np.int64)
         """Per key: the robot that takes the cell over when its holder has left it, or FREE."""

@@ -141,10 +141,11 @@ class Program(Plugin):
         the localisation error in the metrics. Default: the program does not localise."""
         return None
 
-    def finished(self, memory: Memory) -> np.ndarray:
-        """Robots that are done for good and never move again (checked by ``swarmshape
-        check``). Default: none."""
-        return np.zeros(len(memory), dtype=bool)
+    def finished(self, memory: Memory) -> np.ndarray | None:
+        """Robots that are done for good and never move again: settled, they fill the targets
+        they rest on (``swarmshape check`` sees that they stay). Default: None, the program does
+        not say; then a target is filled while a robot of its group rests on it, unsettled."""
+        return None
 
     def drive(self, swarm: Swarm) -> LocalControl:
         return LocalControl(swarm, self)
@@ -343,12 +344,17 @@ class LocalControl:
     def _note_filled(self) -> None:
         """Robots the program calls finished that rest on a target of their group are settled
         (a shape change can leave a finished robot off the new shape; it is not settled
-        there); the swarm fills the targets they rest on."""
+        there); the swarm fills the targets they rest on. A program that does not say which
+        are finished has a target filled while a robot of its group rests on it, unsettled."""
         swarm = self.swarm
         at = swarm.target_at[swarm.cell[:, 0], swarm.cell[:, 1]]
         on_target = (at >= 0) & (swarm.world.target_group[np.maximum(at, 0)] == swarm.group)
-        finished = self.program.finished(self.memory) & (swarm.ahead == 0) & on_target
-        swarm.settle_exactly(finished)
+        resting = (swarm.ahead == 0) & on_target
+        said = self.program.finished(self.memory)
+        if said is None:
+            swarm.settle_exactly(np.zeros_like(resting), filling=resting)
+        else:
+            swarm.settle_exactly(said & resting)
 
     def completed(self, group: int) -> None:
         """Nothing to hand over: the program keeps running as it is."""

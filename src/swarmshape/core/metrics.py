@@ -153,7 +153,7 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
         "overlaps": int(swarm.overlap_total),
         "messages": swarm.driver.messages_sent,
         **LOCAL_FIGURES,
-        **swarm.driver.figures(),
+        **swarm.figures(),
         "robots_lost": swarm.faults.lost,
         "robots_stalled": int((swarm.state == STALLED).sum()),
         "cells_lost_to_stalls": int(swarm.dead.sum()),

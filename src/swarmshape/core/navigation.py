@@ -35,9 +35,11 @@ class CrossingCounter:
     """
 
     def __init__(self, shape_mask: np.ndarray) -> None:
-        counts = shape_mask.astype(np.int64)
-        self._along_x = np.vstack([np.zeros((1, counts.shape[1]), np.int64), counts.cumsum(0)])
-        self._along_y = np.hstack([np.zeros((counts.shape[0], 1), np.int64), counts.cumsum(1)])
+        width, height = shape_mask.shape  # counts up to 25,000,000 cells: int32 will do
+        self._along_x = np.zeros((width + 1, height), dtype=np.int32)
+        self._along_y = np.zeros((width, height + 1), dtype=np.int32)
+        np.cumsum(shape_mask, axis=0, dtype=np.int32, out=self._along_x[1:])
+        np.cumsum(shape_mask, axis=1, dtype=np.int32, out=self._along_y[:, 1:])
 
     def _row(self, y: np.ndarray, xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
         low, high = np.minimum(xa, xb), np.maximum(xa, xb)
@@ -91,9 +93,9 @@ class FieldPlanner:
     def __init__(self, size: tuple[int, int], agents: int) -> None:
         self.size = size
         width, height = size
-        self._rows = np.full((4, width * height), np.inf)
-        self._row_of = np.zeros(agents, dtype=np.int64)
-        self._spare = list(range(1, len(self._rows)))
+        self._rows = np.full((1, width * height), np.inf)  # more as agents need them:
+        self._row_of = np.zeros(agents, dtype=np.int64)  # each is a float per arena cell
+        self._spare: list[int] = []
 
     @staticmethod
     def field(goal: np.ndarray, passable: np.ndarray) -> np.ndarray:

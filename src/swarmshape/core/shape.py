@@ -7,6 +7,7 @@ frame with a `Pose` moves and rotates the shape and its seeds together.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -24,6 +25,22 @@ SEED_SIDES = np.array(
 """The frame cells that share a side with a seed (and are not one)."""
 
 
+MAX_ARENA_CELLS = 25_000_000
+"""The largest arena, in cells (a cap that keeps memory bounded; no side is longer)."""
+
+
+JUMP = 1.2
+"""How far above the side that the area alone says fits `Shape.fitted` starts looking down
+(a tenth in side, a fifth in count)."""
+
+
+def frozen(array: np.ndarray) -> np.ndarray:
+    """`array`, made read-only (an array of a shape or a world is never written after it is
+    made)."""
+    array.flags.writeable = False
+    return array
+
+
 class ShapeError(InputError):
     """A shape or pose that cannot be used; the message says why."""
 
@@ -39,6 +56,11 @@ class Pose:
     def __post_init__(self) -> None:
         if self.rotation % 90:
             raise ShapeError(f"rotation must be a multiple of 90 degrees, got {self.rotation}")
+        if max(abs(self.x), abs(self.y)) > MAX_ARENA_CELLS:  # and so fits int64 arithmetic
+            raise ShapeError(
+                f"pose ({self.x}, {self.y}) lies beyond any arena (no side is longer than "
+                f"{MAX_ARENA_CELLS:,} cells)"
+            )
 
     def to_world(self, frame_cells: np.ndarray) -> np.ndarray:
         """Map integer frame cells to world cells (the unit squares rotate about the origin)."""
@@ -65,6 +87,11 @@ class Shape:
     grid: np.ndarray
     scale: float = 1.0
     origin: tuple[int, int] = (0, 0)
+
+    def __post_init__(self) -> None:
+        # its own read-only copy: a shape is a value, which neither its maker nor a plug-in
+        # that is shown it can change under a running swarm
+        object.__setattr__(self, "grid", frozen(np.array(self.grid, dtype=bool)))
 
     @classmethod
     def from_cells(cls, cells: np.ndarray) -> Shape:
@@ -132,26 +159,45 @@ class Shape:
         """The largest rescaled copy whose cell count does not exceed `agents`.
 
         The paper's answer to too few robots: form the same shape, smaller. The scale is the
-        ratio of long sides, so a user can read how much was lost.
+        ratio of long sides, so a user can read how much was lost. A copy's count grows about
+        as its side squared, so from a copy with too many cells this jumps to the side that
+        puts the count `JUMP` above `agents` and goes down one side at a time from there: a
+        few dozen resamplings of the grid, not one per side (2,000 cells across for 5 robots
+        took 3 minutes so), and the same copy unless counts dip by more than that between
+        nearby sides.
         """
         if agents < 1:
             raise ShapeError("at least one agent is needed to form a shape")
         if self.count <= agents:
             return self
-        return next(smaller for smaller in self.shrunk() if smaller.count <= agents)
+        solid, long_side = self.is_solid, max(self.grid.shape)
+        side = long_side - 1
+        while side >= 1:
+            copy = self._copy(side, solid)
+            if 0 < copy.count <= agents:
+                return copy
+            near = math.floor(side * math.sqrt(agents / max(copy.count, 1)) * JUMP)
+            side = min(side - 1, near) if copy.count > agents else side - 1
+        return next(self.shrunk(0))
 
-    def shrunk(self) -> Iterator[Shape]:
-        """Ever smaller rescaled copies, largest first, down to a single cell. A solid shape's
-        copies stay solid (shrinking may close a notch into a hole or cut off a thin tip)."""
-        solid = self.is_solid
-        long_side = max(self.grid.shape)
-        fraction = self.grid.astype(np.float64)
-        for side in range(long_side - 1, 0, -1):
-            smaller = Shape(
-                crop(resample(fraction, side)), self.scale * side / long_side, self.origin
-            )
-            if solid:
-                smaller = smaller.solid()
+    def shrunk(self, start: int | None = None) -> Iterator[Shape]:
+        """Ever smaller rescaled copies, largest first (from `start` cells across, or one
+        fewer than this shape's), down to a single cell. A solid shape's copies stay solid
+        (shrinking may close a notch into a hole or cut off a thin tip)."""
+        solid, long_side = self.is_solid, max(self.grid.shape)
+        for side in range(min(long_side - 1, long_side if start is None else start), 0, -1):
+            smaller = self._copy(side, solid)
             if smaller.count:
                 yield smaller
         yield Shape(np.ones((1, 1), dtype=bool), self.scale / long_side, self.origin)
+
+    def _copy(self, side: int, solid: bool) -> Shape:
+        """This shape rescaled to `side` cells across its long side (its `solid` part if
+        `solid`); it may have no cell left."""
+        long_side = max(self.grid.shape)
+        smaller = Shape(
+            crop(resample(self.grid.astype(np.float64), side)),
+            self.scale * side / long_side,
+            self.origin,
+        )
+        return smaller.solid() if solid and smaller.count else smaller

@@ -132,7 +132,8 @@ SCALARS = (bool, int, float, str, type(None))
 
 
 def encode_attributes(owner: str, attributes: Mapping[str, Any]) -> dict[str, Any]:
-    """A plug-in's attributes as saved values: numbers, text and arrays, and lists of either.
+    """A plug-in's attributes as saved values: numbers, text and arrays, and lists of either
+    (numpy's scalars, ``np.int64(3)``, count as numbers).
 
     Anything else cannot go into a state file (it would need pickle), which is said plainly.
     """
@@ -141,11 +142,13 @@ def encode_attributes(owner: str, attributes: Mapping[str, Any]) -> dict[str, An
         items = value if isinstance(value, list | tuple) else None
         if isinstance(value, (np.ndarray, *SCALARS)):
             values[name] = value
+        elif isinstance(value, np.generic):
+            values[name] = value.item()
         elif items is not None and all(isinstance(item, np.ndarray) for item in items):
             values[name] = {"arrays": len(items)}
             values |= {f"{name}.{i}": item for i, item in enumerate(items)}
-        elif items is not None and all(isinstance(item, SCALARS) for item in items):
-            values[name] = list(items)
+        elif items is not None and all(isinstance(item, (*SCALARS, np.generic)) for item in items):
+            values[name] = [_plain(item) for item in items]
         else:
             raise SnapshotError(
                 f"{owner} keeps a {type(value).__name__} in self.{name}, which a state file "
@@ -155,21 +158,49 @@ def encode_attributes(owner: str, attributes: Mapping[str, Any]) -> dict[str, An
     return values
 
 
+def _plain(item: Any) -> Any:
+    return item.item() if isinstance(item, np.generic) else item
+
+
 def decode_attributes(saved: Snapshot, fresh: Mapping[str, Any]) -> dict[str, Any]:
-    """The attributes `encode_attributes` saved, each checked against the kind of value a
-    freshly made plug-in holds under that name."""
+    """The attributes `encode_attributes` saved: every one, those a plug-in sets after it is
+    made (in ``on_start``, say) too. One that a freshly made plug-in holds is checked against
+    the kind of value it holds there."""
+    stored = saved.keys()  # a Snapshot is no dict: it lists its names
+    names = sorted({key for key in stored if "." not in key} | set(fresh))
     restored: dict[str, Any] = {}
-    for name, value in fresh.items():
+    for name in names:
+        if name not in fresh:
+            restored[name] = _decode_any(saved, name)
+            continue
+        value = fresh[name]
         if isinstance(value, np.ndarray):
             restored[name] = saved.array(name, value.dtype, (None,) * value.ndim, finite=None)
         elif isinstance(value, list | tuple):
             restored[name] = _decode_list(saved, name)
+        elif isinstance(value, np.generic):
+            got = saved.value(name)
+            if not isinstance(got, SCALARS) or isinstance(got, str | None):
+                raise saved.error(name, f"is a {type(got).__name__}, not a number")
+            restored[name] = type(value)(got)
         else:
             got = saved.value(name)
             if type(got) is not type(value) and not (isinstance(value, float) and type(got) is int):
                 raise saved.error(name, f"is a {type(got).__name__}, not a {type(value).__name__}")
             restored[name] = got
     return restored
+
+
+def _decode_any(saved: Snapshot, name: str) -> Any:
+    """An attribute a fresh plug-in does not hold yet, as `encode_attributes` saved it."""
+    got = saved.value(name)
+    if isinstance(got, np.ndarray):
+        return _any_array(saved, name)
+    if isinstance(got, dict | list):
+        return _decode_list(saved, name)
+    if not isinstance(got, SCALARS):
+        raise saved.error(name, "is not a number, text, an array or a list of them")
+    return got
 
 
 def _decode_list(saved: Snapshot, name: str) -> list[Any]:

@@ -65,6 +65,11 @@ class Strategy(Plugin):
         afterwards, through `on_reshape`.)"""
         swarm.recruit(group)
 
+    def on_renumber(self, swarm: SwarmView, renumber: np.ndarray) -> None:
+        """A group's shape changed, and with it every group's target indices: ``renumber[old]``
+        is each old target's new index, -1 where it went away. Keep target indices the strategy
+        holds in step (they would name other cells, or none). Default: it holds none."""
+
     def drive(self, swarm: Swarm) -> Steering:
         return Steering(swarm, self)
 
@@ -154,16 +159,22 @@ class SwarmView:
     # --- acting -----------------------------------------------------------------------------
 
     def assign(self, robots: np.ndarray, targets: np.ndarray) -> None:
-        """Start `robots` moving to `targets` (indices into `targets`) now."""
-        self._steering.assign(robots, targets)
+        """Start `robots` moving to `targets` (indices into `targets`, each of the robot's own
+        group) now."""
+        robots = self._steering.robots(robots, "assign")
+        self._steering.assign(robots, self._steering.targets_of(robots, targets, "assign"))
 
     def send(self, sender: int, recipient: int, target: int) -> None:
         """Message "go to `target`" to `recipient`; it arrives, and it starts, next step."""
+        recipient = int(self._steering.robots(np.array([recipient]), "send")[0])
+        target = int(
+            self._steering.targets_of(np.array([recipient]), np.array([target]), "send")[0]
+        )
         self._steering.send(sender, recipient, target)
 
     def release(self, robots: np.ndarray) -> None:
         """Let `robots` wander: they have nothing left to do."""
-        self._steering.release(robots)
+        self._steering.release(self._steering.robots(robots, "release"))
 
     def recruit(self, group: int, match: Matcher = greedy) -> None:
         """Match idle robots of `group` to its open targets with `match` and send them there."""
@@ -233,16 +244,67 @@ class Steering:
         return values | prefixed("strategy", self.strategy.snapshot())
 
     def restore(self, saved: Snapshot) -> None:
-        n, m = len(self.target), len(self.swarm.world.targets)
+        swarm, n, m = self.swarm, len(self.target), len(self.swarm.world.targets)
         self.target = saved.array("target", np.int64, (n,), -1, m - 1)
+        heading = self.target >= 0
+        # movers and settled robots have targets, of their own group; settled ones rest on theirs
+        goes = (swarm.state == MOVING) | (swarm.state == SETTLED)
+        mine = swarm.world.target_group[np.maximum(self.target, 0)] == swarm.group
+        settled = np.flatnonzero(swarm.state == SETTLED)
+        resting = swarm.cell[settled] == swarm.world.targets[self.target[settled]]
+        if (heading != goes).any() or not mine[heading].all() or not resting.all():
+            raise saved.error("target", "disagrees with the robots' states, groups and cells")
         self.blocked = saved.array("blocked", np.int64, (n,), 0)
         self.routed = saved.array("routed", bool, (n,))
         self.recruited = saved.array("recruited", bool, (n,))
         self.queue = MessageQueue.restored(saved.part("queue"), n, m)
+        pending = self.queue.pending
+        recipients = np.array([message.recipient for message in pending], dtype=np.int64)
+        targets = np.array([message.target for message in pending], dtype=np.int64)
+        if (swarm.world.target_group[targets] != swarm.group[recipients]).any():
+            raise saved.error("queue.pending", "sends a robot to another group's target")
         self.planner.restore(saved.part("planner"))
         self.strategy.restore(saved.part("strategy"), self.view)
 
     # --- what strategies call, through their view ---------------------------------------------
+
+    def robots(self, robots: np.ndarray, action: str) -> np.ndarray:
+        """`robots` as robot numbers, or an error that says which one does not exist (numpy
+        would take -1 for the last robot, and fail on 10**6 deep inside a step)."""
+        robots = np.asarray(robots)
+        n = len(self.target)
+        if robots.dtype.kind not in "iu" and robots.size:
+            raise TypeError(f"{action}: robots are whole numbers, got {robots.dtype} values")
+        robots = robots.astype(np.int64).reshape(-1)
+        wrong = robots[(robots < 0) | (robots >= n)]
+        if len(wrong):
+            raise IndexError(f"{action}: there is no robot {wrong[0]} (they are 0 to {n - 1})")
+        return robots
+
+    def targets_of(self, robots: np.ndarray, targets: np.ndarray, action: str) -> np.ndarray:
+        """`targets`, one per robot (or one for all), each a target of its robot's own group,
+        or an error that says which is not."""
+        targets = np.asarray(targets)
+        m = len(self.swarm.world.targets)
+        if targets.dtype.kind not in "iu" and targets.size:
+            raise TypeError(f"{action}: targets are whole numbers, got {targets.dtype} values")
+        try:
+            targets = np.broadcast_to(targets.astype(np.int64), robots.shape)
+        except ValueError:
+            raise ValueError(f"{action}: {targets.size} targets for {len(robots)} robots") from None
+        wrong = targets[(targets < 0) | (targets >= m)]
+        if len(wrong):
+            raise IndexError(f"{action}: there is no target {wrong[0]} (they are 0 to {m - 1})")
+        group = self.swarm.group[robots]
+        foreign = np.flatnonzero(self.swarm.world.target_group[targets] != group)
+        if len(foreign):
+            robot, target = robots[foreign[0]], targets[foreign[0]]
+            owner = self.swarm.world.target_group[target]
+            raise ValueError(
+                f"{action}: target {target} belongs to group {owner} and robot {robot} to group "
+                f"{group[foreign[0]]}"
+            )
+        return targets
 
     def send(self, sender: int, recipient: int, target: int) -> None:
         self.queue.send(self.swarm.step_count, sender, recipient, target)
@@ -350,6 +412,7 @@ class Steering:
         has_target = self.target >= 0
         self.target[has_target] = renumber[self.target[has_target]]
         self.release(np.flatnonzero(has_target & (self.target < 0)))
+        self.strategy.on_renumber(self.view, renumber)
 
     def removed(self, robots: np.ndarray, stalled: bool) -> None:
         """A fault took `robots`: forget their targets, paths and messages; robots heading for a
@@ -439,8 +502,11 @@ class Steering:
     def _make_way(self, blocked: np.ndarray, blocker: np.ndarray) -> np.ndarray:
         """Resolve what stands in blocked movers' way; return idle robots asked to step aside.
 
-        Idle robots (waiting or wandering, at rest) step aside. Under `Motion.SWAP` a wanderer
-        caught inside its own shape takes the mover's target instead (`_hand_over`); a ring of
+        Idle robots (waiting or wandering, at rest) step aside. A wanderer that cannot, caught
+        inside its own shape or in a pocket of it with no free cell to step to, takes the
+        mover's target instead (`_hand_over`): under every motion, or a wanderer left in a hole
+        of a shape re-formed smaller blocks the paper's one mover for ever. Under
+        `Motion.SWAP` a ring of
         resting movers each waiting for the next passes its targets round; two movers trade
         targets when that shortens their trips (`_trips`); a settled robot of the same group
         swaps targets with the mover; no robot takes part in two of these in one step; and a
@@ -453,14 +519,15 @@ class Steering:
         state = swarm.state[robot]
         at_rest = swarm.ahead[robot] == 0
         idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
-        if self.motion is Motion.ROUTE:
-            return blocker[idle]
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
         wanders = idle & (state == WANDERING)  # a waiting robot may still be sent elsewhere
-        caught = wanders & same_group & self._in_own_shape(robot)
+        trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
+        caught = wanders & same_group & trapped
         if caught.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
             return self._make_way(blocked[~caught], blocker[~caught])
+        if self.motion is Motion.ROUTE:
+            return blocker[idle]
         settled = is_robot & (state == SETTLED)
         waits_for_mover = same_group & at_rest & (state == MOVING)
         givers, receivers = rotate_rings(blocked[waits_for_mover], robot[waits_for_mover])
@@ -542,24 +609,27 @@ class Steering:
         )
 
     def _random_free_step(self, robots: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
-        """A random direction to an enterable neighbour cell (0 where there is none).
-
-        Idle robots keep out of every shape, their own group's included, unless a new shape was
-        drawn over them.
-        """
+        """A random direction to an enterable neighbour cell (0 where there is none), of
+        `_free_steps`."""
         if len(robots) == 0:
             return np.zeros(0, dtype=np.int64)
+        ok = self._free_steps(robots, own_shape_too=own_shape_too)
+        score = np.where(ok, self.swarm.rng.random((len(robots), 4)), -1.0)
+        best = np.argmax(score, axis=1)
+        return np.where(score.max(axis=1) >= 0, best + 1, 0)
+
+    def _free_steps(self, robots: np.ndarray, *, own_shape_too: bool) -> np.ndarray:
+        """Per robot ``(k, 4)``, which neighbour cells (by `STEPS` direction 1 to 4) an idle robot
+        may step into: free, and out of every shape (its own group's too, with `own_shape_too`)
+        unless a new shape was drawn over it, which it must be able to walk out of."""
         swarm, lattice = self.swarm, self.swarm.lattice
         here = lattice.key(rows(swarm.cell, robots))
         near = here[:, None] + lattice.offsets[None, 1:]
         groups = np.full(len(robots), -1) if own_shape_too else swarm.group[robots]
         ok = lattice.enterable(near, groups[:, None])
-        # an idle robot that a changed shape now covers must be able to walk out of it
         caught = np.flatnonzero(own_shape_too & (lattice.owner[here] >= 0))
         ok[caught] = lattice.holder[near[caught]] == FREE
-        score = np.where(ok, swarm.rng.random((len(robots), 4)), -1.0)
-        best = np.argmax(score, axis=1)
-        return np.where(score.max(axis=1) >= 0, best + 1, 0)
+        return ok
 
     def _count_waiting(
         self, starters: np.ndarray, stuck: np.ndarray, steps: _Steps, winners: np.ndarray

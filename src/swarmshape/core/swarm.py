@@ -20,19 +20,22 @@ from scipy import ndimage
 
 from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.faults import Faults
+from swarmshape.core.guard import PluginCode
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, Limits, move, positions, resolve_claims
 from swarmshape.core.options import TEXT, option, spec_of
 from swarmshape.core.perception import Senses
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.core.states import LOST, MOVING, SETTLED, STALLED, WAITING, WANDERING, State
-from swarmshape.core.world import World, WorldError
+from swarmshape.core.world import World, WorldError, cells_at
 from swarmshape.errors import InputError
 
 if TYPE_CHECKING:
     from swarmshape.core.plugin import Plugin
     from swarmshape.core.shape import Pose, Shape
 
+MAX_STEP = 2**62
+"""The most steps a run can count (its step numbers go into int64 arrays)."""
 FOLLOW_PASSES = 64
 """Passes that let a train of robots following each other start and stop as one (each pass
 frees one more link; a longer train moves with a short ripple)."""
@@ -164,8 +167,8 @@ class Swarm:
         self._take(world, plugin, seed, params or Params())
         n = world.agents
         if start is None:  # random free cells, drawn from the run's one generator
-            starts = world.start_cells()
-            start = starts[self.rng.choice(len(starts), n, replace=False)]
+            free = world.start_mask()
+            start = cells_at(free, self.rng.choice(int(free.sum()), n, replace=False))
         self.cell = np.array(start, dtype=np.int64)
         self.start_cell = self.cell.copy()
         self.direction = np.zeros(n, dtype=np.int64)
@@ -198,14 +201,17 @@ class Swarm:
         self.dead = np.zeros(len(world.targets), dtype=bool)
         """Targets no robot can fill: held by a stalled robot, or cut off by stalled robots
         from every robot of their group that can still move (lost coverage)."""
-        self.driver = plugin.drive(self)
-        self._index_world()
-        self.driver.start()
+        with self._code.running(" as the run started"):
+            self.driver = plugin.drive(self)
+            self._index_world()
+            self.driver.start()
 
     def _take(self, world: World, plugin: Plugin, seed: int, params: Params) -> None:
         """What a swarm is given, whether it starts afresh or resumes."""
         self.world = world
         self.plugin = plugin
+        self._code = PluginCode.of(plugin)
+        """Where the plug-in's code lives: a failure there is its own (see `core.guard`)."""
         self.seed = seed
         self.params = params
         self.rng = np.random.default_rng(seed)
@@ -237,7 +243,8 @@ class Swarm:
         }
         values |= prefixed("world", self.world.snapshot())
         values |= prefixed("faults", self.faults.snapshot()) | {"dead": self.dead}
-        return values | prefixed("driver", self.driver.snapshot())
+        with self._code.running(" while the run was saved"):
+            return values | prefixed("driver", self.driver.snapshot())
 
     @classmethod
     def restored(cls, saved: Snapshot, plugin: Plugin) -> Swarm:
@@ -267,19 +274,25 @@ class Swarm:
         swarm._take(world, plugin, saved.integer("seed", 0, 2**63 - 1), params)
         swarm._restore_arrays(saved)
         swarm._restore_rng(saved)
-        swarm.step_count = saved.integer("step", 0)
-        swarm.overlap_total = saved.integer("overlap_total", 0)
+        swarm.step_count = saved.integer("step", 0, MAX_STEP)
+        # a run never has overlapping robots: counted ones mean a crafted or damaged state
+        swarm.overlap_total = saved.integer("overlap_total", 0, 0)
         completed = saved.value("completed_at")
         if not isinstance(completed, list) or len(completed) != len(world.groups):
             raise saved.error("completed_at", "does not have one entry per group")
-        if not all(step is None or type(step) is int for step in completed):
-            raise saved.error("completed_at", "holds something other than steps")
+        if not all(at is None or (type(at) is int and 0 <= at <= swarm.step_count)
+                   for at in completed):  # fmt: skip
+            raise saved.error("completed_at", "holds something other than steps of the run")
         swarm.completed_at = completed
-        swarm.faults = Faults.restored(saved.part("faults"), world.agents)
-        swarm.driver = plugin.drive(swarm)
-        swarm._index_world()
-        swarm.dead = saved.array("dead", bool, (len(world.targets),))
-        swarm.driver.restore(saved.part("driver"))
+        swarm.faults = Faults.restored(saved.part("faults"), world.agents, swarm.step_count)
+        if not np.array_equal(swarm.faults.lost_at >= 0, swarm.state == LOST):
+            raise saved.error("faults.lost_at", "disagrees with which robots are lost")
+        with swarm._code.running(" while the run was resumed"):
+            swarm.driver = plugin.drive(swarm)
+            swarm._index_world()
+            if not np.array_equal(saved.array("dead", bool, (len(world.targets),)), swarm.dead):
+                raise saved.error("dead", "disagrees with where the stalled robots are")
+            swarm.driver.restore(saved.part("driver"))
         return swarm
 
     def _restore_arrays(self, saved: Snapshot) -> None:
@@ -294,7 +307,7 @@ class Swarm:
         self.distance = saved.array("distance", np.float64, (n,), 0)
         self.state = saved.array("state", np.int8, (n,), 0, len(State) - 1)
         self.filled = saved.array("filled", bool, (len(self.world.targets),))
-        self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0)
+        self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0, 0)
         self.leader = saved.array("leader", np.int64, (n,), -1, n - 1)
         self.pace = saved.array("pace", np.float64, (n,), 0.1, 1)
         self.lattice = Lattice(self.world.size)
@@ -323,6 +336,10 @@ class Swarm:
             raise saved.error("holder", "disagrees with where the robots and seeds are")
         self.lattice.holder[:] = holder
         self.lattice.queued[:] = queued
+        filled = self.world.targets[self.filled]
+        resting = self.lattice.grid[filled[:, 0], filled[:, 1]]
+        if ((resting < 0) | (self.state[np.maximum(resting, 0)] != SETTLED)).any():
+            raise saved.error("filled", "marks a target that no settled robot rests on")
 
     def _restore_rng(self, saved: Snapshot) -> None:
         try:
@@ -337,7 +354,7 @@ class Swarm:
         self.lattice.mark_targets(world.targets, world.target_group)
         seeds_per_group = [len(g.seeds) for g in world.groups]
         self._seed_group = np.repeat(np.arange(len(world.groups)), seeds_per_group)
-        self.target_at = np.full(world.size, -1, dtype=np.int64)
+        self.target_at = np.full(world.size, -1, dtype=np.int32)  # up to 25,000,000 targets
         self.target_at[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
         """The index of the target at each cell, -1 where there is none."""
         self.dead = self._find_dead()
@@ -365,18 +382,21 @@ class Swarm:
         """`robots` wait for a target."""
         self.state[robots] = WAITING
 
-    def settle_exactly(self, settled: np.ndarray) -> None:
+    def settle_exactly(self, settled: np.ndarray, filling: np.ndarray | None = None) -> None:
         """Exactly the robots of the mask `settled` are settled (a local program says so anew
-        each step); the others that can act are moving if under way, else waiting."""
+        each step); the others that can act are moving if under way, else waiting. Those of
+        `filling` fill the targets they rest on as the settled do, without being settled."""
         working = self._mobile()
         self.state[working] = np.where(self.ahead[working] > 0, MOVING, WAITING)
         self.state[working & settled] = SETTLED
-        self._refill()
+        self._refill(None if filling is None else working & filling)
 
-    def _refill(self) -> None:
-        """A target is filled while a settled robot of its group rests on it."""
+    def _refill(self, filling: np.ndarray | None = None) -> None:
+        """A target is filled while a settled robot of its group (or one of `filling`) rests
+        on it."""
         self.filled[:] = False
-        under = self._target_under(np.flatnonzero(self.state == SETTLED))
+        robots = self.state == SETTLED if filling is None else (self.state == SETTLED) | filling
+        under = self._target_under(np.flatnonzero(robots))
         self.filled[under[under >= 0]] = True
 
     def _target_under(self, robots: np.ndarray) -> np.ndarray:
@@ -410,6 +430,11 @@ class Swarm:
         ]
         return all(done) and not all(self._whole(g) for g in groups)
 
+    def movable(self, group: int) -> int:
+        """How many robots of `group` can still move (neither removed nor stalled): what a new
+        shape for it may ask of it."""
+        return int((self._mobile() & (self.group == group)).sum())
+
     @property
     def present(self) -> np.ndarray:
         """Robots still in the run (not removed by a fault)."""
@@ -426,18 +451,24 @@ class Swarm:
     # --- one step -------------------------------------------------------------------------------
 
     def step(self) -> None:
-        if self.faults.scheduled:
-            self._strike()
-        coasting = np.flatnonzero((self.state == STALLED) & (self.ahead > 0))
-        self.driver.decide()
-        self._move()
-        self.driver.arrived()
-        self.step_count += 1
-        if len(coasting):
-            self._walls_moved(coasting)
-        self._audit()
-        self._note_completion()
-        self.faults.note(self.step_count, self.complete)
+        with self._code.running(f" at step {self.step_count}"):
+            if self.faults.scheduled:
+                self._strike()
+            coasting = np.flatnonzero((self.state == STALLED) & (self.ahead > 0))
+            self.driver.decide()
+            self._move()
+            self.driver.arrived()
+            self.step_count += 1
+            if len(coasting):
+                self._walls_moved(coasting)
+            self._audit()
+            self._note_completion()
+            self.faults.note(self.step_count, self.complete)
+
+    def figures(self) -> dict[str, Any]:
+        """What the plug-in's kind adds to the run's metrics (see `Driver.figures`)."""
+        with self._code.running(" when the run was measured"):
+            return self.driver.figures()
 
     def claim(self, robots: np.ndarray, directions: np.ndarray, origins: np.ndarray) -> np.ndarray:
         """Each robot asks for the cell one step in `direction` from the key `origin` (its own
@@ -515,21 +546,33 @@ class Swarm:
         """Form a new shape for `group` without a restart (the live editor's hand-over).
 
         Robots on cells that stay in the shape keep them and do not move; robots whose cells
-        or targets went away wander; the strategy then hands out the open cells.
+        or targets went away wander; the strategy then hands out the open cells. A shape with
+        more cells than the group's robots that can move (`movable`) can fill is refused, and
+        nothing changes: it would never form (`Shape.fitted` makes one that fits).
         """
         old = self.world
         new = old.reshaped(group, shape, pose or old.groups[group].pose)
         seeds = new.mask(new.seeds) & ~old.mask(old.seeds)
         if (self.lattice.grid[seeds] >= 0).any():
             raise WorldError("the seeds' new cells are taken by robots; move them elsewhere")
-        self.filled = np.zeros(len(new.targets), dtype=bool)
-        self.driver.reshaped(_renumbering(old.targets, new.targets, new.size))
-        self.lattice.grid[old.mask(old.seeds)] = FREE
-        self.world = new
-        self._index_world()
-        self._refill()
-        self.completed_at[group] = None
-        self.driver.hand_out(group)
+        cells = new.groups[group].targets
+        fillable = int(self._reachable(group)[cells[:, 0], cells[:, 1]].sum())
+        movable = self.movable(group)
+        if fillable > movable:
+            raise WorldError(
+                f"group {new.groups[group].name!r}: the new shape has {fillable:,} cells for the "
+                f"{movable:,} robots that can move: short by {fillable - movable:,}; draw fewer "
+                f"cells, or fit it with shape.fitted({movable})"
+            )
+        with self._code.running(f" as the shape changed at step {self.step_count}"):
+            self.filled = np.zeros(len(new.targets), dtype=bool)
+            self.driver.reshaped(_renumbering(old.targets, new.targets, new.size))
+            self.lattice.grid[old.mask(old.seeds)] = FREE
+            self.world = new
+            self._index_world()
+            self._refill()
+            self.completed_at[group] = None
+            self.driver.hand_out(group)
 
     # --- faults ---------------------------------------------------------------------------------
 
@@ -560,7 +603,8 @@ class Swarm:
         else:
             self._take_off(robots)
         self.dead = self._find_dead()
-        self.driver.removed(robots, stall)
+        with self._code.running(f" after a fault at step {self.step_count}"):
+            self.driver.removed(robots, stall)
         groups = np.unique(self.group[robots]).tolist()
         for g in range(len(self.world.groups)):  # a stall may wall off another group's cells
             self._rescale_if_short(g)
@@ -624,7 +668,7 @@ class Swarm:
         its size, and the cells no robot is left for stay open."""
         if self.params.on_loss != "rescale":
             return
-        mobile = int((self._mobile() & (self.group == group)).sum())
+        mobile = self.movable(group)
         shape, pose = self.world.groups[group].shape, self.world.groups[group].pose
         reachable = self._reachable(group)
 
@@ -687,7 +731,7 @@ class Swarm:
             return bool(filled.any()) or not dead.any()
         if self.params.on_loss != "keep" or not self.faults.log or not filled.any():
             return False  # only a fault (each one logged) leaves a group short of robots
-        return int(filled.sum()) == int((self._mobile() & (self.group == group)).sum())
+        return int(filled.sum()) == self.movable(group)
 
     def _find_dead(self) -> np.ndarray:
         """Targets held by a stalled robot, or cut off by stalled robots (with the seeds and the

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from swarmshape.core.shape import SEED_CELLS, Pose, Shape
+from swarmshape.core.shape import MAX_ARENA_CELLS, SEED_CELLS, Pose, Shape, frozen
 from swarmshape.core.snapshot import Snapshot, prefixed
 from swarmshape.errors import InputError
 
@@ -33,9 +33,12 @@ START_LAYOUTS = ("packed", "scatter")
 the side away from its shape (as in the Kilobot self-assembly experiments); ``scatter`` draws
 random free cells (the default)."""
 
+START_BLOCK = 2**20
+"""Arena cells looked through at a time when start cells are picked."""
+
 MAX_AGENTS = 1_000_000
-MAX_ARENA_CELLS = 25_000_000
-"""Caps that keep memory bounded (a million agents need about a gigabyte all told)."""
+"""A cap that keeps memory bounded (a million agents need about a gigabyte all told); the
+arena's is `MAX_ARENA_CELLS`."""
 
 
 class WorldError(InputError):
@@ -65,6 +68,10 @@ class Group:
     frame_cells: np.ndarray
     targets: np.ndarray
     seeds: np.ndarray
+
+    def __post_init__(self) -> None:
+        for array in (self.frame_cells, self.targets, self.seeds):
+            frozen(array)
 
     def packed(self) -> np.ndarray:
         """World cells ``(agents, 2)`` of a block of this group's robots packed against its
@@ -105,10 +112,11 @@ class World:
     seeds: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "targets", np.concatenate([g.targets for g in self.groups]))
+        targets = np.concatenate([g.targets for g in self.groups])
         sizes = [len(g.targets) for g in self.groups]
-        object.__setattr__(self, "target_group", np.repeat(np.arange(len(sizes)), sizes))
-        object.__setattr__(self, "seeds", np.concatenate([g.seeds for g in self.groups]))
+        object.__setattr__(self, "targets", frozen(targets))
+        object.__setattr__(self, "target_group", frozen(np.repeat(np.arange(len(sizes)), sizes)))
+        object.__setattr__(self, "seeds", frozen(np.concatenate([g.seeds for g in self.groups])))
 
     @property
     def agents(self) -> int:
@@ -169,30 +177,57 @@ class World:
     def depth(self) -> np.ndarray:
         """For each target, how many cells it lies inside its group's shape: the lattice
         distance to the nearest cell that is not the shape's (1 on the rim)."""
-        inside = self.mask(self.targets)
-        owner = np.full(self.size, -1)
-        owner[self.targets[:, 0], self.targets[:, 1]] = self.target_group
         depth = np.zeros(len(self.targets), dtype=np.int64)
         for group in range(len(self.groups)):
-            mine = inside & (owner == group)
-            field = ndimage.distance_transform_cdt(np.pad(mine, 1), metric="taxicab")[1:-1, 1:-1]
-            cells = self.targets[self.target_group == group]
-            depth[self.target_group == group] = field[cells[:, 0], cells[:, 1]]
+            mine = self.target_group == group
+            if not mine.any():
+                continue
+            # within the group's box and a ring round it, which holds the nearest cell that is
+            # not the shape's: the measure of the shape, not of the arena
+            cells = self.targets[mine] - (self.targets[mine].min(axis=0) - 1)
+            inside = np.zeros(tuple(cells.max(axis=0) + 2), dtype=bool)
+            inside[cells[:, 0], cells[:, 1]] = True
+            field = ndimage.distance_transform_cdt(inside, metric="taxicab")
+            depth[mine] = field[cells[:, 0], cells[:, 1]]
         return depth
 
     def outside(self) -> np.ndarray:
         """Free cells connected to the arena border: where agents can come from."""
         free = ~(self.mask(self.targets) | self.mask(self.seeds))
-        labels, _ = ndimage.label(free)
-        border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
-        return np.isin(labels, border[border > 0])
+        labels, count = ndimage.label(free)
+        reached = np.zeros(count + 1, dtype=bool)
+        reached[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
+        reached[0] = False  # not free
+        return reached[labels]
 
-    def start_cells(self) -> np.ndarray:
-        """Cells where agents may start: outside, and not touching a target or a seed."""
+    def start_mask(self) -> np.ndarray:
+        """Per arena cell, whether agents may start there: outside, and not touching a target
+        or a seed."""
         placed = ndimage.binary_dilation(
             self.mask(self.targets) | self.mask(self.seeds), structure=np.ones((3, 3))
         )
-        return np.argwhere(self.outside() & ~placed)
+        return self.outside() & ~placed
+
+    def start_cells(self) -> np.ndarray:
+        """The cells ``(k, 2)`` where agents may start (see `start_mask`), in ``[x, y]`` order."""
+        return np.argwhere(self.start_mask())
+
+
+def cells_at(mask: np.ndarray, chosen: np.ndarray) -> np.ndarray:
+    """The cells ``(k, 2)`` of `mask` at the places `chosen` of its ``[x, y]`` order (of
+    ``np.argwhere(mask)``), found without listing them all: 16 bytes a cell, 400 MB on the
+    largest arena for the 20 robots that start there."""
+    flat = mask.reshape(-1)
+    starts = np.arange(0, len(flat), START_BLOCK)
+    before = np.cumsum(np.add.reduceat(flat, starts, dtype=np.int64))
+    block = np.searchsorted(before, chosen, side="right")
+    places = np.empty(len(chosen), dtype=np.int64)
+    for index in np.unique(block).tolist():
+        mine = block == index
+        inside = np.flatnonzero(flat[starts[index] : starts[index] + START_BLOCK])
+        earlier = before[index - 1] if index else 0
+        places[mine] = starts[index] + inside[chosen[mine] - earlier]
+    return np.column_stack(np.unravel_index(places, mask.shape))
 
 
 def blank_world(
@@ -201,7 +236,7 @@ def blank_world(
     """An arena with one group's seeds and no shape yet: the editor's empty canvas."""
     group = Group.placed(name, colour, Shape(np.zeros((0, 0), dtype=bool)), pose, 0)
     world = World(size, (group,), name)
-    _validate(world, starts=False)
+    _validate(world, starts=False, blank=True)
     return world
 
 
@@ -288,7 +323,10 @@ def _auto_arena(groups: list[Group], packed: bool = False) -> tuple[list[Group],
     return moved, (int(width), int(height))
 
 
-def _validate(world: World, *, starts: bool = True) -> None:
+def _validate(world: World, *, starts: bool = True, blank: bool = False) -> None:
+    """Refuse a world that cannot run: an arena too small or too large, a group off it or with
+    no cell to form (unless `blank`: the editor's canvas), overlapping groups, and (with
+    `starts`) too little room to start the robots."""
     width, height = world.size
     if width < 1 or height < 1:
         raise WorldError(f"arena must be at least 1x1 cells, got {width}x{height}")
@@ -297,6 +335,8 @@ def _validate(world: World, *, starts: bool = True) -> None:
             f"arena {width}x{height} is larger than {MAX_ARENA_CELLS:,} cells; make it smaller"
         )
     for group in world.groups:
+        if not blank and not len(group.targets):
+            raise WorldError(f"group {group.name!r}: its shape has no cells; draw at least one")
         cells = np.concatenate([group.targets, group.seeds])
         if (cells < 0).any() or (cells >= np.array(world.size)).any():
             raise WorldError(
@@ -305,7 +345,7 @@ def _validate(world: World, *, starts: bool = True) -> None:
     everything = np.concatenate([world.targets, world.seeds])
     if len(np.unique(everything, axis=0)) < len(everything):
         raise WorldError("groups overlap: two shapes or seed sets share a cell; move a seed pose")
-    if starts and len(world.start_cells()) < world.agents:
+    if starts and int(world.start_mask().sum()) < world.agents:
         raise WorldError(
             f"arena {width}x{height} has no room to start {world.agents} agents; enlarge the arena"
         )

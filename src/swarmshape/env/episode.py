@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -36,8 +37,8 @@ from swarmshape.env.observe import (
 from swarmshape.env.relay import NAME, Relay, RelayControl
 from swarmshape.env.rewards import CoverageShare, Reward
 from swarmshape.errors import InputError
-from swarmshape.io.scenario import PALETTE, parse_colour, read_start_cells
-from swarmshape.runs import load_world, start_swarm
+from swarmshape.io.scenario import PALETTE, parse_colour
+from swarmshape.runs import load_world, start_cells, start_swarm
 
 FPS = 30
 RENDER_MODES = ("human", "rgb_array")
@@ -80,9 +81,7 @@ class Episode:
             self.world = load_world(self.config)
         else:
             self.config, self.world = _grid_world(np.asarray(shape), options)
-        self.start = None
-        if self.config.start is not None:
-            self.start = read_start_cells(self.config.start, self.world)
+        self.start = start_cells(self.config, self.world)
         senses = self.config.senses()
         cells_in_reach = len(senses.reach())
         neighbours = cells_in_reach if neighbours is None else neighbours
@@ -180,6 +179,22 @@ class Episode:
         state = self.swarm.state
         return (state != LOST) & (state != STALLED)
 
+    def stacked(self, actions: Mapping[int, Any]) -> np.ndarray:
+        """Stacked actions from some robots' own (by robot index): whole numbers only, as
+        `split` takes them (numpy would take 1.9 as 1 and "3" as 3); the others stay where they
+        are and repeat their last message."""
+        size = self.layout.message_size
+        stacked = np.zeros(self.robots if size == 0 else (self.robots, 1 + size), np.int64)
+        if size:
+            stacked[:, 1:] = self.control.broadcast
+        for robot, action in actions.items():
+            value = np.asarray(action)
+            if not np.issubdtype(value.dtype, np.integer) or value.shape != stacked.shape[1:]:
+                form = "" if size == 0 else f", {1 + size} of them"
+                raise ValueError(f"an action is a whole number{form}; got {action!r}")
+            stacked[robot] = value
+        return stacked
+
     def split(self, actions: Any) -> tuple[np.ndarray, np.ndarray]:
         """Moves ``(n,)`` and messages ``(n, message_size)`` from stacked actions, checked."""
         actions = np.asarray(actions)
@@ -215,7 +230,7 @@ def _grid_world(grid: np.ndarray, options: dict[str, Any]) -> tuple[Any, World]:
         raise InputError(f"{given[0]} applies to an image file, not to a grid given in code")
     config = configure(None, strategy=NAME, **options)
     spec = GroupSpec("grid", Shape(grid), parse_colour(PALETTE[0]), config.agents)
-    return config, build_world([spec], config.arena, "grid")
+    return config, build_world([spec], config.arena, "grid", config.start == "packed")
 
 
 class Host:

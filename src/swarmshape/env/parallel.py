@@ -64,13 +64,10 @@ class SwarmEnv(Host, ParallelEnv):
         if not self.agents:
             return {}, {}, {}, {}, {}
         episode = self.episode
-        size = episode.layout.message_size
-        stacked = np.zeros(episode.robots if size == 0 else (episode.robots, 1 + size), np.int64)
-        if size:
-            stacked[:, 1:] = episode.control.broadcast
-        for index, agent in enumerate(self.possible_agents):
-            if agent in actions:
-                stacked[index] = actions[agent]
+        unknown = sorted(set(actions) - set(self.index))
+        if unknown:
+            raise ValueError(f"no agent {unknown[0]!r} in this environment")
+        stacked = episode.stacked({self.index[agent]: act for agent, act in actions.items()})
         obs, rewards, formed, out_of_steps = episode.step(stacked)
         live, acting = self.agents, episode.acting()
         index = [self.index[agent] for agent in live]

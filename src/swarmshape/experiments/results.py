@@ -14,7 +14,7 @@ import contextlib
 import csv
 import json
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator
 from dataclasses import dataclass
 from io import StringIO
 from pathlib import Path
@@ -34,18 +34,25 @@ csv.field_size_limit(2**31 - 1)
 
 
 @contextlib.contextmanager
-def open_results(path: Path, settings: list[str], *, force: bool = False) -> Iterator[Results]:
-    """`path` held for one sweep whose rows have the `settings` columns (``config.NAME``).
+def open_results(
+    path: Path,
+    settings: list[str],
+    *,
+    runs: Collection[str] | None = None,
+    force: bool = False,
+) -> Iterator[Results]:
+    """`path` held for one sweep whose rows have the `settings` columns (``config.NAME``), and,
+    if given, the `runs` keys (``run``).
 
     Checked before any run: the folder can be written, no other sweep holds the file, and the
-    file is new, empty or a results file of the same settings; with `force` any other file is
-    started over (the first row replaces it)."""
+    file is new, empty or a results file of the same settings whose rows are all whole and
+    among `runs`; with `force` any other file is started over (the first row replaces it)."""
     path = Path(path)
     check_output(path, "--out", may_replace=True)
     with _lock(path):
         results = Results(path)
         try:
-            results.take_over(settings)
+            results.take_over(settings, runs)
         except InputError:
             if not force:
                 raise
@@ -67,11 +74,13 @@ class Results:
         self._fd: int | None = None
         self._size = 0
 
-    def take_over(self, settings: list[str]) -> None:
+    def take_over(self, settings: list[str], runs: Collection[str] | None = None) -> None:
         """Read an existing file's runs, refusing one that is not a results file of these
-        `settings`, and drop a last row cut short."""
+        `settings` (and, if given, of these `runs`: rows of another sweep's would be merged
+        with this one's without a word), and drop a last row cut short."""
         if not self.path.exists() or self.path.stat().st_size == 0:
             return
+        runs = None if runs is None else set(runs)
         with _reading(self.path) as handle:
             scanned = _scan(handle, self.path)
             if scanned is None:
@@ -90,6 +99,12 @@ class Results:
                     raise InputError(
                         f"{self.path}: {damage}; remove that line, or add --force to start "
                         "the file over"
+                    )
+                if runs is not None and record.fields[0] not in runs:
+                    raise InputError(
+                        f"{self.path}: line {record.line} is a run this sweep does not have "
+                        f"({_unlike(record.fields[0], runs)}); write to a new --out, or add "
+                        "--force to start it over"
                     )
                 done.add(record.fields[0])
                 good = record.end
@@ -247,13 +262,45 @@ def _same_settings(path: Path, header: list[str], settings: list[str]) -> None:
 
 
 def _damage(header: list[str], record: _Record) -> str | None:
-    """What is wrong with a row, if anything. A damaged row is refused, never skipped: its run
-    would be missing from the results without a word."""
-    with contextlib.suppress(json.JSONDecodeError):
-        whole = record.complete and len(record.fields) == len(header)
-        if whole and isinstance(json.loads(record.fields[0]), dict):
-            return None
-    return f"line {record.line} is damaged ({len(record.fields)} fields for {len(header)} columns)"
+    """What is wrong with a row, if anything: a field too many or too few, or a run key that
+    is not the run its settings columns name. A damaged row is refused, never skipped: its run
+    would be missing from the results (or another run's taken for it) without a word."""
+    fields = record.fields
+    if not record.complete or len(fields) != len(header):
+        return f"line {record.line} is damaged ({len(fields)} fields for {len(header)} columns)"
+    run = _run(fields[0])
+    settings = {name: field for name, field in zip(header, fields, strict=True)
+                if name.startswith("config.")}  # fmt: skip
+    if run is None or {f"config.{name}": _cell(value) for name, value in run.items()} != settings:
+        return f"line {record.line} is damaged (its run key does not match its settings)"
+    return None
+
+
+def _run(key: str) -> dict[str, Any] | None:
+    """A run's settings from its key; None for text that is no run key."""
+    try:
+        run = json.loads(key)
+    except (json.JSONDecodeError, RecursionError):
+        return None
+    return run if isinstance(run, dict) else None
+
+
+def _cell(value: Any) -> str:
+    """How a setting's value reads in its CSV column (as `csv.writer` writes it)."""
+    return "" if value is None else str(value)
+
+
+def _unlike(key: str, runs: Collection[str]) -> str:
+    """What sets a run apart from `runs`: its first setting with a value none of them has."""
+    run = _run(key) or {}
+    values: dict[str, set[str]] = {}
+    for other in runs:
+        for name, value in (_run(other) or {}).items():
+            values.setdefault(name, set()).add(json.dumps(value))
+    for name, value in sorted(run.items()):
+        if json.dumps(value) not in values.get(name, set()):
+            return f"{name} {value}"
+    return "another combination of its settings"
 
 
 def _order(run: str) -> tuple:

@@ -33,6 +33,8 @@ MAX_PIXELS = 25_000_000
 
 EDITOR_TAG = "swarmshape-one-cell-per-pixel"
 
+BLOCK = 2**20
+"""Pixels whose ink is decided at a time (in doubles: 40 MB)."""
 DARK_BORDER = 0.9
 """Share of dark border pixels that means "dark background" (a shape may touch the border)."""
 
@@ -58,7 +60,7 @@ class ShapeWarning(UserWarning):
 
 @dataclass(frozen=True, eq=False)
 class Picture:
-    """An image's ink per pixel (0 or 1), cropped to the ink, before it is sized into cells."""
+    """An image's ink per pixel, cropped to the ink, before it is sized into cells."""
 
     path: Path
     ink: np.ndarray
@@ -94,8 +96,8 @@ def read_picture(
     if not 0.0 < threshold < 1.0:
         raise BitmapError(f"--threshold must be between 0 and 1, got {threshold}")
     rgba, one_cell_per_pixel = _open_rgba(path)
-    ink, luminance, opaque = ink_fraction(rgba, threshold=threshold, invert=invert)
-    near = float(np.mean(np.abs(luminance[opaque] - threshold) < 0.1)) if opaque.any() else 0.0
+    ink, near = ink_of(rgba, threshold=threshold, invert=invert)
+    del rgba  # the ink is what is kept
     if not ink.any():
         hint = "try --invert" if near < 0.5 else "try another --threshold or --invert"
         raise BitmapError(f"{path}: no shape found (the image has no ink; {hint})")
@@ -120,7 +122,7 @@ def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
     sized = resample(picture.ink, across)
     if not sized.any():
         raise BitmapError(
-            f"{picture.path}: the shape vanishes at --cells {cells}; {_help(picture)}"
+            f"{picture.path}: the shape vanishes at {across} cells across; {_help(picture)}"
         )
     kept, expected = int(sized.sum()), picture.ink.mean() * sized.size
     if kept <= 2 < picture.ink.sum():
@@ -166,7 +168,7 @@ def _help(picture: Picture) -> str:
 
 
 def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
-    """Pixels as RGBA floats, and whether the editor wrote the file (one cell per pixel)."""
+    """Pixels as 8-bit RGBA, and whether the editor wrote the file (one cell per pixel)."""
     readable_file(path, "an image or a .toml scenario", BitmapError)
     try:
         with warnings.catch_warnings():
@@ -179,7 +181,7 @@ def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:
                         f"{MAX_PIXELS:,}); shrink it first"
                     )
                 image.seek(0)  # first frame of an animation
-                rgba = np.asarray(image.convert("RGBA"), dtype=np.float64) / 255.0
+                rgba = np.asarray(image.convert("RGBA"))  # 4 bytes a pixel, as they come
                 return rgba, image.info.get(EDITOR_TAG) == "1"
     except UnidentifiedImageError:
         formats = ", ".join(FORMATS[:-1]) + f" or {FORMATS[-1]}"
@@ -200,25 +202,42 @@ def _reason(error: BaseException) -> str:
     return str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
 
 
-def ink_fraction(
-    rgba: np.ndarray, *, threshold: float, invert: bool
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per pixel 1.0 for ink, 0.0 for background, decided as `load_grid` documents; and the
-    luminance and opacity it was decided from."""
-    opaque = rgba[..., 3] >= 0.5
-    luminance = rgba[..., :3] @ np.array([0.299, 0.587, 0.114])
+def ink_of(rgba: np.ndarray, *, threshold: float, invert: bool) -> tuple[np.ndarray, float]:
+    """Per pixel whether it is ink, decided as `load_grid` documents from 8-bit RGBA; and the
+    share of opaque pixels within 0.1 of the threshold (high for a low-contrast photo).
+
+    Worked out `BLOCK` pixels at a time, so beside the pixels themselves it takes two bytes a
+    pixel (a 5000x5000 picture took 1.7 GB in doubles before it was found to have no ink)."""
+    height, width = rgba.shape[:2]
+    flat = rgba.reshape(-1, 4)
+    light = np.empty(len(flat), dtype=bool)
+    opaque = np.empty(len(flat), dtype=bool)
+    near = 0
+    for start in range(0, len(flat), BLOCK):
+        block_light, block_opaque, luminance = _decided(flat[start : start + BLOCK], threshold)
+        light[start : start + BLOCK], opaque[start : start + BLOCK] = block_light, block_opaque
+        near += int((np.abs(luminance[block_opaque] - threshold) < 0.1).sum())
+    light, opaque = light.reshape(height, width), opaque.reshape(height, width)
     border = np.concatenate([opaque[0], opaque[-1], opaque[:, 0], opaque[:, -1]])
-    border_lum = np.concatenate([luminance[0], luminance[-1], luminance[:, 0], luminance[:, -1]])
-    light = luminance > threshold
+    border_light = np.concatenate([light[0], light[-1], light[:, 0], light[:, -1]])
     if invert:
         ink = light
     elif not border.any():
-        ink = np.ones_like(opaque)  # a cut-out on a transparent canvas: every opaque pixel
-    elif np.mean(border_lum[border] <= threshold) >= DARK_BORDER and (light & opaque).any():
+        ink = opaque  # a cut-out on a transparent canvas: every opaque pixel
+    elif np.mean(~border_light[border]) >= DARK_BORDER and (light & opaque).any():
         ink = light  # a dark background with something light on it
     else:
         ink = ~light
-    return (ink & opaque).astype(np.float64), luminance, opaque
+    seen = int(opaque.sum())
+    return ink & opaque, near / seen if seen else 0.0
+
+
+def _decided(pixels: np.ndarray, threshold: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For 8-bit RGBA `pixels` ``(k, 4)``: which are lighter than `threshold`, which are
+    opaque, and their luminance (0..1)."""
+    values = pixels.astype(np.float64) / 255.0
+    luminance = values[:, :3] @ np.array([0.299, 0.587, 0.114])
+    return luminance > threshold, values[:, 3] >= 0.5, luminance
 
 
 def save_grid(grid: np.ndarray, path: str | os.PathLike[str]) -> None:

@@ -2,8 +2,11 @@
 
 The manifest names the format and its version, holds every plain value, lists the arrays, and
 carries a SHA-256 over all of it, so a damaged file is refused rather than resumed differently.
-Arrays are read with ``allow_pickle=False`` and the whole file is size-checked before anything
-is decompressed, so a crafted file can neither run code nor exhaust memory.
+Arrays are read with ``allow_pickle=False``. The manifest is read first (within
+`MAX_MANIFEST`), then every array's header: each must declare the size its member unpacks to,
+and together they must fit what a run of the world the manifest describes can keep
+(`most_bytes`), before any array is decompressed; so a crafted file can neither run code nor
+exhaust memory or time.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from tokenize import TokenError
 from typing import Any
 
 import numpy as np
+import numpy.lib.format as npy
 
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write, readable_file
@@ -31,6 +35,14 @@ options and its senses; 3 kept the paper's order as a run setting. 3: runs keep 
 MANIFEST = "manifest"
 MAX_BYTES = 8 * 2**30
 """Largest state, uncompressed: about what a million robots on the largest arena take."""
+MAX_MANIFEST = 2**30
+"""Largest manifest, uncompressed (a long fault log is its longest part)."""
+ROBOT_BYTES = 4096
+"""What a run keeps per robot, at most: its arrays (cells, speeds, states, targets ...) and a
+program's memory, with room to spare (today's programs keep under 400 bytes)."""
+CELL_BYTES = 64
+"""What a run keeps per arena cell, at most, besides path fields: the lattice's holders and
+queue, each group's grid (today 17 bytes a cell)."""
 PICKLE_HEADER = b"swarmshape state 1\n"
 """How the first, pickle-based format began; such files are refused, never unpickled."""
 
@@ -74,13 +86,26 @@ def load_state(path: Path) -> dict[str, Any]:
         ) from None
     if f"{MANIFEST}.npy" not in names:
         raise InputError(f"{path}: not a swarmshape state file (write one with --save-state)")
-    if sum(names.values()) > MAX_BYTES:
-        raise InputError(f"{path}: state file too large (over {MAX_BYTES // 2**30} GiB unpacked)")
+    if names[f"{MANIFEST}.npy"] > MAX_MANIFEST:
+        raise InputError(f"{path}: state file too large (its manifest is over 1 GiB unpacked)")
     try:
         with np.load(path, allow_pickle=False) as archive:
-            members = {name: archive[name] for name in archive.files}
-        text = members.pop(MANIFEST).tobytes().decode("utf-8")
-        manifest = json.loads(text, parse_float=_finite, parse_constant=_finite)
+            manifest = _manifest(archive[MANIFEST])
+            declared = {name: _declared(archive.zip, name) for name in archive.zip.namelist()}
+            declared.pop(f"{MANIFEST}.npy")
+            most, total = most_bytes(manifest), sum(declared.values())
+            if most is None and total:
+                raise ValueError("arrays, and a manifest that does not say the size of its world")
+            if total > (most or 0):
+                raise StateTooLarge(total, most or 0)
+            members = {name: archive[name] for name in archive.files if name != MANIFEST}
+        if not all(isinstance(member, np.ndarray) for member in members.values()):
+            raise ValueError("a member that is not an array")  # numpy hands those over as bytes
+    except StateTooLarge as error:
+        raise InputError(
+            f"{path}: state file too large for its run ({error.declared:,} bytes unpacked, where "
+            f"a run of its world keeps at most {error.most:,})"
+        ) from None
     except (ValueError, OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeError,
             RecursionError, TokenError, MemoryError, NotImplementedError):  # fmt: skip
         # numpy tokenizes a damaged array header (TokenError), and allocates what one declares;
@@ -89,12 +114,76 @@ def load_state(path: Path) -> dict[str, Any]:
     return _checked(path, manifest, members)
 
 
+class StateTooLarge(Exception):
+    """Arrays that would unpack to more than their run can keep."""
+
+    def __init__(self, declared: int, most: int) -> None:
+        self.declared, self.most = declared, most
+
+
+def _manifest(member: Any) -> Any:
+    """The manifest's JSON, from its member (numpy hands a member that is no .npy over as
+    bytes, which is a damaged file)."""
+    if not isinstance(member, np.ndarray):
+        raise ValueError("a manifest that is not an array")
+    return json.loads(member.tobytes().decode("utf-8"), parse_float=_finite, parse_constant=_finite)
+
+
+def _declared(archive: zipfile.ZipFile, name: str) -> int:
+    """The bytes the member `name` unpacks to, read from its header alone (a few hundred
+    bytes): the array it declares must be exactly what the member holds, or numpy would
+    allocate what a header claims."""
+    size = archive.getinfo(name).file_size
+    with archive.open(name) as member:
+        version = npy.read_magic(member)
+        if version == (1, 0):
+            shape, _, dtype = npy.read_array_header_1_0(member)
+        elif version in ((2, 0), (3, 0)):
+            shape, _, dtype = npy.read_array_header_2_0(member)
+        else:
+            raise ValueError(f"an array of npy format {version}")
+        header = member.tell()
+    if dtype.hasobject:
+        raise ValueError("an array of Python objects")  # pickle, which is never loaded
+    data = math.prod(shape) * dtype.itemsize
+    if header + data != size:
+        raise ValueError("an array header that does not match its member")
+    return size
+
+
+def most_bytes(manifest: Any) -> int | None:
+    """The most a saved run of the world `manifest` describes can keep: per robot, per arena
+    cell, and a path field (a float per cell) for every robot and as many again spare (the
+    planner doubles its rows as it needs them); within `MAX_BYTES`. None if the manifest does
+    not say its world's size and robots."""
+    values = manifest.get("values") if isinstance(manifest, dict) else None
+    values = values if isinstance(values, dict) else {}
+    size, groups = values.get("swarm.world.size"), values.get("swarm.world.groups")
+    if not (isinstance(size, list) and len(size) == 2 and all(_count(v) for v in size)):
+        return None
+    if not _count(groups):
+        return None
+    agents = [values.get(f"swarm.world.group{index}.agents") for index in range(groups)]
+    if not all(_count(a) for a in agents):
+        return None
+    robots, cells = sum(agents), (size[0] + 2) * (size[1] + 2)
+    fields = 8 * cells * (2 * robots + 4)
+    return min(MAX_BYTES, ROBOT_BYTES * robots + CELL_BYTES * cells * groups + fields)
+
+
+def _count(value: Any) -> bool:
+    return type(value) is int and 0 <= value <= MAX_BYTES
+
+
 def _checked(path: Path, manifest: Any, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         raise InputError(f"{path}: not a swarmshape state file (write one with --save-state)")
-    if manifest.get("version") != VERSION:
+    version = manifest.get("version")
+    if type(version) is not int:  # '3' would read "version '3'; this reads version 3"
+        raise InputError(f"{path}: damaged state file (its format version is not a number)")
+    if version != VERSION:
         raise InputError(
-            f"{path}: a state file of format version {manifest.get('version')!r}; this "
+            f"{path}: a state file of format version {version}; this "
             f"swarmshape reads version {VERSION}"
         )
     listed, plain = manifest.get("arrays"), manifest.get("values")

@@ -8,10 +8,12 @@ any other bad input.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 import stat
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 from swarmshape.errors import InputError
@@ -75,8 +77,45 @@ class StreamedFile:
         return OutputError(f"{self.path}: cannot write it ({error.strerror or error})")
 
     def discard(self) -> None:
-        self.handle.close()
+        """Remove the temporary file; what could not be written is dropped (a full disk fails
+        the flush of the last rows as well), and a second call does nothing."""
+        with contextlib.suppress(OSError):
+            self.handle.close()
         Path(self._tmp).unlink(missing_ok=True)
+
+
+class TemporaryFolder:
+    """Files written one by one as a run goes (numbered frames), kept in a temporary folder
+    beside `target` and moved into it at `finish`; `discard` leaves nothing behind."""
+
+    def __init__(self, target: Path) -> None:
+        self.target = target
+        try:
+            self.path = Path(tempfile.mkdtemp(dir=target.parent, prefix=TEMP_PREFIX))
+        except OSError as error:
+            raise OutputError(f"{target}: cannot write there ({error.strerror})") from None
+
+    def finish(self, replaces: str) -> None:
+        """Move the files in: the whole folder if `target` is not there yet, else file by file,
+        and then remove the files of the target matching the pattern `replaces` that this
+        run did not write (an earlier run's)."""
+        try:
+            if not self.target.exists():
+                os.replace(self.path, self.target)
+                return
+            written = {path.name for path in self.path.iterdir()}
+            for name in sorted(written):
+                os.replace(self.path / name, self.target / name)
+            for stale in self.target.glob(replaces):
+                if stale.name not in written:
+                    stale.unlink()
+            self.path.rmdir()
+        except OSError as error:
+            self.discard()
+            raise OutputError(f"{self.target}: cannot write it ({error.strerror})") from None
+
+    def discard(self) -> None:
+        shutil.rmtree(self.path, ignore_errors=True)
 
 
 def write_text(path: str | os.PathLike[str], text: str) -> None:
@@ -94,6 +133,8 @@ def readable_file(path: Path, expected: str, error: type[InputError] = InputErro
         raise error(f"{path}: no such file") from None
     except OSError as failure:
         raise error(f"{path}: cannot read it ({failure.strerror})") from None
+    except ValueError:  # no file name may hold a NUL byte
+        raise error(f"{path}: no such file (its name holds a NUL byte)") from None
     if stat.S_ISDIR(mode):
         raise error(f"{path}: is a directory, expected {expected}")
     if not stat.S_ISREG(mode):
@@ -101,11 +142,22 @@ def readable_file(path: Path, expected: str, error: type[InputError] = InputErro
     return path
 
 
-def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = False) -> None:
+def check_output(
+    path: Path,
+    flag: str,
+    *,
+    may_replace: bool,
+    folder: bool = False,
+    inputs: Mapping[tuple[int, int], str] | None = None,
+) -> None:
     """Refuse, before a run, an output that cannot be written there, that is not a regular file
-    (or, for a `folder` output, a folder), or that would replace an existing file (or fill a
-    non-empty folder) without `may_replace`. A symlink counts as the file it points to."""
+    (or, for a `folder` output, a folder), that is one of the run's `inputs` (by `identity`,
+    whatever `may_replace` says: a run never writes over what it reads), or that would replace
+    an existing file (or fill a non-empty folder) without `may_replace`. A symlink counts as the
+    file it points to."""
     target = Path(os.path.realpath(path))
+    if os.path.islink(target):  # realpath stops at a link it cannot resolve: a loop
+        raise OutputError(f"{path}: {flag} names a symlink that leads back to itself; name a file")
     nowhere = OutputError(f"{path}: {flag} cannot write there (no such folder, or no permission)")
     try:
         longest = os.pathconf(target.parent, "PC_NAME_MAX")
@@ -124,8 +176,21 @@ def check_output(path: Path, flag: str, *, may_replace: bool, folder: bool = Fal
             raise OutputError(f"{path}: {flag} needs a file name, and this is a folder")
         if not folder and not stat.S_ISREG(mode):
             raise OutputError(f"{path}: {flag} would replace a pipe or a device; name a file")
+        what = (inputs or {}).get(identity(target))
+        if what is not None:
+            raise OutputError(f"{path}: {flag} would replace {what}; name another file")
         if not may_replace and (not folder or any(target.iterdir())):
             raise OutputError(f"{path}: {flag} would overwrite it; add --force to allow that")
+
+
+def identity(path: str | os.PathLike[str]) -> tuple[int, int] | None:
+    """What tells files apart whatever their names (symlinks, hard links, ``..``): device and
+    inode; None for a file that is not there or cannot be looked up."""
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError):  # ValueError: a NUL byte in the name
+        return None
+    return info.st_dev, info.st_ino
 
 
 def distinct_outputs(outputs: Iterable[tuple[str, Path]]) -> None:

@@ -22,6 +22,7 @@ An image is a scenario with one group named after the file.
 from __future__ import annotations
 
 import csv
+import itertools
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,7 +31,7 @@ from typing import Any
 import numpy as np
 from PIL import ImageColor
 
-from swarmshape.core.shape import Pose, Shape
+from swarmshape.core.shape import Pose, Shape, ShapeError
 from swarmshape.core.world import GroupSpec, World
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import DEFAULT_THRESHOLD, grid_for, grid_of, load_grid, read_picture
@@ -146,7 +147,10 @@ def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupS
             raise ScenarioError(f"{where.path}: {label}.pose must be a table like {{x = 0, y = 0}}")
         where.known(pose_table, POSE_KEYS, f"{label}.pose")
         values = {k: where.typed(v, int, f"{label}.pose.{k}") for k, v in pose_table.items()}
-        pose = Pose(**values)
+        try:
+            pose = Pose(**values)
+        except ShapeError as error:
+            raise ScenarioError(f"{where.path}: {label}.pose: {error}") from None
     name = where.typed(table.get("name", f"group {index + 1}"), str, f"{label}.name")
     return GroupSpec(name, Shape(grid), rgb, agents, pose)
 
@@ -187,9 +191,12 @@ def read_start_cells(path: Path, world: World) -> np.ndarray:
     """Start cells ``(agents, 2)`` from a CSV with columns ``x,y`` (one row per agent, groups
     in scenario order): free arena cells, none on a shape or a seed, no two alike."""
     path = readable_file(Path(path), "a CSV of start cells")
-    try:
-        with path.open(newline="", encoding="utf-8") as handle:
-            rows = list(csv.DictReader(handle))
+    try:  # rows past one more than the robots are counted, not kept: a huge file is refused
+        with path.open(newline="", encoding="utf-8-sig") as handle:  # a BOM is no column name
+            reader = csv.DictReader(handle)
+            reader.fieldnames = [name.strip() for name in reader.fieldnames or []]  # "x, y"
+            rows = list(itertools.islice(reader, world.agents + 1))
+            extra = sum(1 for _ in reader)
     except OSError as error:
         raise InputError(f"{path}: cannot read start positions ({error.strerror})") from None
     except (UnicodeDecodeError, csv.Error) as error:
@@ -198,13 +205,11 @@ def read_start_cells(path: Path, world: World) -> np.ndarray:
         numbers = [(int(row["x"]), int(row["y"])) for row in rows]
     except (KeyError, TypeError, ValueError):
         raise InputError(f"{path}: needs integer columns x,y (cells), one row per agent") from None
-    if len(numbers) != world.agents:
+    if len(numbers) + extra != world.agents:
         robots = f"{world.agents} robot{'' if world.agents == 1 else 's'}"
-        raise InputError(f"{path}: {len(numbers)} start positions for {robots}")
+        raise InputError(f"{path}: {len(numbers) + extra} start positions for {robots}")
     cells = np.array([(-1, -1) if max(abs(x), abs(y)) > 2**62 else (x, y) for x, y in numbers])
-    allowed = np.zeros(world.size, dtype=bool)
-    free = world.start_cells()
-    allowed[free[:, 0], free[:, 1]] = True
+    allowed = world.start_mask()
     inside = (cells >= 0).all(axis=1) & (cells < np.array(world.size)).all(axis=1)
     ok = np.zeros(len(cells), dtype=bool)
     ok[inside] = allowed[cells[inside, 0], cells[inside, 1]]

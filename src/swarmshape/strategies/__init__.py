@@ -20,6 +20,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from swarmshape.core.guard import PluginCode
 from swarmshape.core.local import Program
 from swarmshape.core.options import specs
 from swarmshape.core.plugin import Plugin
@@ -91,6 +92,11 @@ def owners_of(option_name: str) -> list[str]:
 
 
 def _import(spec: str) -> type[Plugin]:
+    with PluginCode.named(spec).running(" as it was loaded"):  # wherever it is first looked up
+        return _imported(spec)
+
+
+def _imported(spec: str) -> type[Plugin]:
     module_name, _, attribute = spec.rpartition(":")
     if module_name.endswith(".py"):
         module = _load_file(Path(module_name), spec)

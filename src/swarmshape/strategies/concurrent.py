@@ -16,6 +16,7 @@ import numpy as np
 
 from swarmshape.core import assignment
 from swarmshape.core.assignment import Matcher
+from swarmshape.core.snapshot import Snapshot
 from swarmshape.core.steering import Strategy, SwarmView
 from swarmshape.strategies import register
 
@@ -68,10 +69,33 @@ class OneShot(Strategy):
         self._planned[swarm.group == group] = -1
         swarm.recruit(group, type(self).match)
 
+    def restore(self, saved: Snapshot, swarm: SwarmView) -> None:
+        """Take the plans back, checked: one per robot, each -1 or a target of its group."""
+        super().restore(saved, swarm)
+        n, m = len(swarm.cells), len(swarm.targets)
+        planned, leaves = self._planned, self._leaves_at
+        if planned.shape != (n,) or leaves.shape != (n,) or not _whole(planned, leaves):
+            raise saved.error("_planned", f"does not hold one whole number per robot ({n})")
+        sent = planned >= 0
+        if (planned < -1).any() or (planned >= m).any():
+            raise saved.error("_planned", "names a target that does not exist")
+        if (swarm.target_group[planned[sent]] != swarm.group[sent]).any():
+            raise saved.error("_planned", "sends a robot to another group's target")
+
+    def on_renumber(self, swarm: SwarmView, renumber: np.ndarray) -> None:
+        """Robots not yet sent off keep their planned cells, under the cells' new indices
+        (another group re-formed smaller shifted them: two-squares.toml, seed 5, crashed)."""
+        planned = self._planned >= 0
+        self._planned[planned] = renumber[self._planned[planned]]
+
     def on_fault(self, swarm: SwarmView, group: int, robots: np.ndarray) -> None:
         """A fault opened cells: the idle robots (those not yet sent off among them) are matched
         to the open cells the same way, as after a reshape."""
         self.on_reshape(swarm, group)
+
+
+def _whole(*arrays: np.ndarray) -> bool:
+    return all(array.dtype.kind == "i" for array in arrays)
 
 
 @register

@@ -106,13 +106,15 @@ class Paper(Strategy):
             raise saved.error("_repairing", f"does not have one flag per group ({groups})")
         if len(self._sequence) != groups or len(self._next) != groups:
             raise saved.error("_sequence", f"does not have one order per group ({groups})")
-        for sequence, done in zip(self._sequence, self._next, strict=True):
+        for group, (sequence, done) in enumerate(zip(self._sequence, self._next, strict=True)):
             if not isinstance(sequence, np.ndarray) or sequence.ndim != 1:
                 raise saved.error("_sequence", "holds something other than lists of targets")
             in_range = sequence.dtype.kind == "i" and ((sequence >= 0) & (sequence < targets)).all()
             counted = type(done) is int and 0 <= done <= len(sequence)
-            if sequence.ndim != 1 or not in_range or not counted:
+            if not in_range or not counted:
                 raise saved.error("_sequence", "names targets that do not exist")
+            if (swarm.target_group[sequence] != group).any():
+                raise saved.error("_sequence", "orders another group's targets")
 
     def on_settled(self, swarm: SwarmView, agents: np.ndarray) -> None:
         for agent in agents.tolist():

@@ -18,7 +18,7 @@ from PIL import Image
 
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
-from swarmshape.io.files import atomic_write
+from swarmshape.io.files import OutputError, TemporaryFolder, atomic_write
 from swarmshape.runs import Observer
 from swarmshape.ui.render import Renderer, frame
 
@@ -39,9 +39,10 @@ FRAME_FILES = "frame-[0-9][0-9][0-9][0-9][0-9][0-9][0-9].png"
 
 
 class Recorder(Observer):
-    """Captures every `every`-th step of a swarm; `close` writes the files. Frames written
-    into a folder that held an earlier run's frames replace them all: at `close`, frame files
-    this run did not write are removed."""
+    """Captures every `every`-th step of a swarm; `close` writes the files. Frames are drawn
+    into a temporary folder beside their folder and moved into it at `close`, where they
+    replace an earlier run's frames, all of them; a run abandoned (`discard`) leaves the
+    folder as it was."""
 
     def __init__(
         self,
@@ -67,7 +68,8 @@ class Recorder(Observer):
         if frames is not None:
             if frames.exists() and not frames.is_dir():
                 raise InputError(f"{frames}: --frames needs a folder, and this is a file")
-            Path(os.path.realpath(frames)).mkdir(parents=True, exist_ok=True)  # through a link
+            frames = Path(os.path.realpath(frames))  # through a link
+            self._unfinished = TemporaryFolder(frames)
         self.animation, self.frames, self.every, self.size = animation, frames, every, size
         self._keep = max(2, min(MAX_FRAMES, FRAME_PIXELS // (width * height)))
         self._images: list[Image.Image] = []
@@ -85,8 +87,11 @@ class Recorder(Observer):
         pixels = frame(swarm, self.size, self._renderer, caption(swarm))
         image = Image.fromarray(pixels).quantize(colors=32)
         if self.frames is not None:
-            path = self.frames / f"frame-{swarm.step_count:07d}.png"
-            atomic_write(path, lambda tmp: image.save(tmp, format="PNG"))
+            path = self._unfinished.path / f"frame-{swarm.step_count:07d}.png"
+            try:
+                image.save(path, format="PNG")
+            except OSError as error:
+                raise OutputError(f"{path}: cannot write it ({error.strerror or error})") from None
             self._written.add(path.name)
         if self.animation is not None:
             self._images.append(image)
@@ -98,9 +103,7 @@ class Recorder(Observer):
         """Write the animation (atomically), if one was asked for; `swarm` gives the last frame."""
         self.capture(swarm, force=True)  # a run rarely ends on the stride: keep its end too
         if self.frames is not None:
-            for stale in self.frames.glob(FRAME_FILES):
-                if stale.name not in self._written:
-                    stale.unlink()
+            self._unfinished.finish(FRAME_FILES)
         if self.animation is None or not self._images:
             return
         form = ANIMATIONS[self.animation.suffix.lower()]
@@ -110,6 +113,11 @@ class Recorder(Observer):
         first, *rest = self._images
         options = {"save_all": True, "append_images": rest, "duration": FRAME_MS, "loop": 0}
         atomic_write(self.animation, lambda tmp: first.save(tmp, format=form, **options))
+
+    def discard(self) -> None:
+        """The run was abandoned: its frames go, and the folder is as it was."""
+        if self.frames is not None:
+            self._unfinished.discard()
 
     def _video(self, path: str) -> None:
         """The frames as an H.264 MP4 at the animations' pace, each padded to even sides
