@@ -20,21 +20,44 @@ from swarmshape.strategies import create
 
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 
-# CI checks the same examples every run, so a red build always reproduces; runs elsewhere
-# draw new ones and so keep exploring.
-settings.register_profile("ci", derandomize=True, print_blob=True)
+# The suite's own pace: enough examples of each property to catch a rule broken anywhere common,
+# in the few minutes a change's test run may take. `--slow` runs twenty times as many, and the
+# tests marked slow (large swarms, long regressions): what a night run is for. CI checks the
+# same examples every run, so a red build always reproduces; runs elsewhere draw new ones and
+# so keep exploring.
+settings.register_profile("quick", max_examples=50)
+settings.register_profile("ci", parent=settings.get_profile("quick"), derandomize=True,
+                          print_blob=True)  # fmt: skip
 settings.register_profile("slow", max_examples=1000)
-if os.environ.get("CI"):
-    settings.load_profile("ci")
+settings.load_profile("ci" if os.environ.get("CI") else "quick")
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    parser.addoption("--slow", action="store_true", help="many more hypothesis examples")
+    parser.addoption(
+        "--slow", action="store_true", help="the slow tests too, and many more examples"
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "slow: runs only with --slow (large swarms, long runs)")
     if config.getoption("--slow"):
         settings.load_profile("slow")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Leave the tests marked slow out of a run without `--slow`, and say so."""
+    if config.getoption("--slow"):
+        return
+    slow = [item for item in items if item.get_closest_marker("slow")]
+    if slow:
+        config.hook.pytest_deselected(items=slow)
+        items[:] = [item for item in items if not item.get_closest_marker("slow")]
+
+
+def slow_for(slow: str, param: str) -> object:
+    """`param` of a parametrised test, marked slow when it is `slow` (a plug-in whose runs of
+    the test take a minute where the others take seconds)."""
+    return pytest.param(param, marks=pytest.mark.slow) if param == slow else param
 
 
 @pytest.fixture

@@ -5,7 +5,7 @@ warning), no traceback, and no file changed that the command line did not name a
 (`tests.fuzzing` has the cases and the rules; ``scripts/fuzz.py`` runs thousands).
 
 Cases run in this process, which is fast; those that read a pipe or a device run in a forked
-process with their memory and time limited. ``pytest --slow`` runs ten times as many.
+process with their memory and time limited. ``pytest --slow`` runs twenty times as many.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ def material(tmp_path_factory) -> Path:
 
 
 def examples(share: int) -> settings:
-    """`share` % of the profile's examples (100 by default, 1000 with --slow)."""
+    """`share` % of the profile's examples (50 by default, 1000 with --slow)."""
     return settings(
         max_examples=max(1, settings().max_examples * share // 100),
         deadline=None,

@@ -32,7 +32,7 @@ from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import Runner, load_world, resume, save, start_cells, start_swarm
 from swarmshape.session import summary_line
 from swarmshape.strategies import available, create
-from tests.conftest import SHAPES, grid_from, world_of
+from tests.conftest import SHAPES, grid_from, slow_for, world_of
 
 STRATEGIES = sorted(available())
 REPAIRING = [s for s in STRATEGIES if not getattr(available()[s], "grows_from_seeds", False)]
@@ -307,7 +307,7 @@ def test_a_program_that_grows_from_its_seeds_keeps_every_invariant_through_fault
     assert run_metrics(swarm)["robots_lost"] == lost == (0 if kind == "stall" else entry["robots"])
 
 
-@pytest.mark.parametrize("strategy", STRATEGIES)
+@pytest.mark.parametrize("strategy", [slow_for("self-assembly", s) for s in STRATEGIES])
 def test_a_run_saved_mid_fault_resumes_byte_for_byte(tmp_path, strategy):
     config = configure(
         None,

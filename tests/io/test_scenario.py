@@ -4,7 +4,7 @@ import pytest
 
 from swarmshape.config import configure
 from swarmshape.core.shape import Pose
-from swarmshape.errors import InputError
+from swarmshape.errors import InputError, SettingWarning
 from swarmshape.io.scenario import load_scenario, scenario_settings
 from tests.conftest import SHAPES
 
@@ -61,7 +61,8 @@ def test_bad_scenarios_name_the_file_and_the_key(tmp_path, text, message):
 
 def test_noise_settings_reach_the_run_and_a_bad_one_names_the_file(tmp_path):
     path = write(tmp_path, "msg_loss = 0.3\ndistance_noise = 0\n[[groups]]\nshape = 'line.png'\n")
-    config = configure(path, seed=1)
+    with pytest.warns(SettingWarning, match="read only by local plug-ins"):
+        config = configure(path, seed=1)  # the default strategy, a central one, ignores noise
     assert (config.msg_loss, config.distance_noise) == (0.3, 0.0)
     path = write(tmp_path, "sense_radius = 40\n[[groups]]\nshape = 'line.png'\n")
     with pytest.raises(InputError, match=f"^{path}: sense_radius must be a number from 1 to 16"):

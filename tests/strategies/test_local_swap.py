@@ -4,6 +4,7 @@ cells that lost messages left open."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -90,6 +91,7 @@ def test_robots_at_rest_that_want_trades_always_agree_one(robots):
         assert (wants[wants[asking]] == asking).any(), wants
 
 
+@pytest.mark.slow
 def test_a_seeker_between_two_arms_keeps_to_the_open_cell_it_heard_of():
     """The 1,018-robot S, seed 2, stopped one cell short from step 2,000 on: its last robot
     without a goal, in the bay between two arms and out of sight of both, heard of the open
@@ -100,6 +102,7 @@ def test_a_seeker_between_two_arms_keeps_to_the_open_cell_it_heard_of():
     assert swarm.overlap_total == 0
 
 
+@pytest.mark.slow
 def test_robots_passing_each_other_on_their_way_round_do_not_circle_for_ever():
     """The 442-robot S, seed 0, stopped two cells short from step 1,250 on: two robots
     between the arena's top edge and the S, going round it opposite ways, stepped round each
