@@ -36,8 +36,8 @@ from swarmshape.env.observe import (
 from swarmshape.env.relay import NAME, Relay, RelayControl
 from swarmshape.env.rewards import CoverageShare, Reward
 from swarmshape.errors import InputError
-from swarmshape.io.scenario import PALETTE, parse_colour, read_start_cells
-from swarmshape.runs import load_world, start_swarm
+from swarmshape.io.scenario import PALETTE, parse_colour
+from swarmshape.runs import load_world, start_cells, start_swarm
 
 FPS = 30
 RENDER_MODES = ("human", "rgb_array")
@@ -80,9 +80,7 @@ class Episode:
             self.world = load_world(self.config)
         else:
             self.config, self.world = _grid_world(np.asarray(shape), options)
-        self.start = None
-        if self.config.start is not None:
-            self.start = read_start_cells(self.config.start, self.world)
+        self.start = start_cells(self.config, self.world)
         senses = self.config.senses()
         cells_in_reach = len(senses.reach())
         neighbours = cells_in_reach if neighbours is None else neighbours
@@ -215,7 +213,7 @@ def _grid_world(grid: np.ndarray, options: dict[str, Any]) -> tuple[Any, World]:
         raise InputError(f"{given[0]} applies to an image file, not to a grid given in code")
     config = configure(None, strategy=NAME, **options)
     spec = GroupSpec("grid", Shape(grid), parse_colour(PALETTE[0]), config.agents)
-    return config, build_world([spec], config.arena, "grid")
+    return config, build_world([spec], config.arena, "grid", config.start == "packed")
 
 
 class Host:
