@@ -139,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "policy",
         nargs="?",
-        help="random, a local program (swarmshape strategies lists them), or "
+        help="random, learned, a local program (swarmshape strategies lists them), or "
         "path/to/file.py:Name or module:Name (a class, made with no arguments, or a policy)",
     )
     bench.add_argument("--tasks", help="task names, comma-separated (default: every task)")

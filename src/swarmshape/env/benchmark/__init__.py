@@ -1,7 +1,7 @@
 """A benchmark of shape formation for multi-agent learning: the versioned task suite
 ``shape-formation-v1`` (`suite`), one scoring function for any policy over batched
-observations (`score.evaluate`), and the leaderboard's baselines (`baselines`: random and the
-built-in local programs driven through the environment).
+observations (`score.evaluate`), and the leaderboard's baselines (`baselines`: random, the
+built-in local programs driven through the environment, and a learned policy in `learned`).
 
     from swarmshape.env.benchmark import evaluate, policy, tasks, to_markdown
     results = evaluate(policy("random"), tasks("star-100"), seeds=[0, 1])
@@ -12,6 +12,7 @@ holds the suite's definition and the leaderboard.
 """
 
 from swarmshape.env.benchmark.baselines import Random, Scripted, local_programs, policy
+from swarmshape.env.benchmark.learned import Learned
 from swarmshape.env.benchmark.score import (
     Context,
     Policy,
@@ -23,6 +24,6 @@ from swarmshape.env.benchmark.score import (
 from swarmshape.env.benchmark.suite import SUITE, TASKS, Task, tasks
 
 __all__ = [
-    "SUITE", "TASKS", "Context", "Policy", "Random", "Scripted", "Task", "evaluate",
+    "SUITE", "TASKS", "Context", "Learned", "Policy", "Random", "Scripted", "Task", "evaluate",
     "leaderboard", "local_programs", "policy", "tasks", "to_json", "to_markdown",
 ]  # fmt: skip

@@ -1,4 +1,4 @@
-"""The leaderboard's baselines, and how a policy is named: ``random``, any local
+"""The leaderboard's baselines, and how a policy is named: ``random``, ``learned``, any local
 program by its registered name (driven through the environment), or a policy in code,
 ``path/to/file.py:Name`` or ``package.module:Name`` (a class, made with no arguments, or a
 ready policy object)."""
@@ -11,6 +11,7 @@ import numpy as np
 
 import swarmshape.strategies as strategies
 from swarmshape.core.local import Memory, Program
+from swarmshape.env.benchmark.learned import Learned
 from swarmshape.env.episode import MOVES
 from swarmshape.env.observe import perception_of
 from swarmshape.errors import InputError
@@ -61,10 +62,12 @@ def policy(spec: str) -> Any:
     """The policy `spec` names (see the module's description)."""
     if spec == "random":
         return Random()
+    if spec == "learned":
+        return Learned()
     if not strategies.is_code(spec):
         if spec in local_programs():
             return Scripted(spec)
-        choices = ", ".join(["random", *local_programs()])
+        choices = ", ".join(["random", "learned", *local_programs()])
         raise InputError(f"unknown policy {spec!r}; choose {choices}, or file.py:Name")
     found = strategies.load(spec, "policy")
     made = found() if isinstance(found, type) else found
