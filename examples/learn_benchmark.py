@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from swarmshape.env.benchmark import Context, Learned, Task
+from swarmshape.env.benchmark import Learned, Task
 from swarmshape.env.benchmark.learned import WEIGHTS
-from swarmshape.env.benchmark.score import environment
+from swarmshape.env.benchmark.score import environment, play
 from swarmshape.io.files import write_text
 
 FULL = dict(generations=20, population=16, elite=4, robots=100, steps=400)
@@ -39,17 +39,11 @@ def training_tasks(robots: int, steps: int) -> list[Task]:
 
 def score(weights: np.ndarray, task: Task, seed: int, env) -> float:
     """Coverage averaged over the episode's steps."""
-    policy = Learned(weights)
-    obs, _ = env.reset(seed=seed)
-    policy.reset(Context(task, seed, env.num_envs, env.layout, env.blueprint))
     total = 0.0
-    for step in range(task.steps):
-        obs, _, terminated, truncated, _ = env.step(policy(obs))
+    for step, formed in enumerate(play(Learned(weights), task, seed, env)):
         total += env.coverage()
-        if terminated[0]:
+        if formed:
             return (total + task.steps - step - 1) / task.steps
-        if truncated[0]:
-            break
     return total / task.steps
 
 

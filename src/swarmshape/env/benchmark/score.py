@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -58,9 +59,9 @@ def name_of(policy: Any) -> str:
     return str(getattr(policy, "name", type(policy).__name__))
 
 
-def episode(policy: Policy, task: Task, seed: int, env: Any = None) -> dict[str, Any]:
-    """One episode of `policy` on `task` from `seed`: its figures (see `evaluate`)."""
-    env = env or environment(policy, task)
+def play(policy: Policy, task: Task, seed: int, env: Any) -> Iterator[bool]:
+    """Run one episode of `policy` on `task` from `seed` in `env`, yielding after every step
+    whether the shape is formed (a caller reads `env` as the swarm forms, or stops early)."""
     obs, _ = env.reset(seed=seed)
     if hasattr(policy, "reset"):
         policy.reset(Context(task, seed, env.num_envs, env.layout, env.blueprint))
@@ -71,8 +72,16 @@ def episode(policy: Policy, task: Task, seed: int, env: Any = None) -> dict[str,
         except ValueError as error:
             raise InputError(f"policy {name_of(policy)}: {error}") from None
         obs, _, terminated, truncated, _ = env.step(actions)
+        yield bool(terminated[0])
         if terminated[0] or truncated[0]:
-            break
+            return
+
+
+def episode(policy: Policy, task: Task, seed: int, env: Any = None) -> dict[str, Any]:
+    """One episode of `policy` on `task` from `seed`: its figures (see `evaluate`)."""
+    env = env or environment(policy, task)
+    for _ in play(policy, task, seed, env):
+        pass
     swarm = env.episode.swarm
     figures = run_metrics(swarm)
     return {
