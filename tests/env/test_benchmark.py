@@ -12,13 +12,16 @@ import pytest
 
 from swarmshape.cli import main
 from swarmshape.env.benchmark import (
+    TASKS,
     Context,
     Random,
     Scripted,
     Task,
     evaluate,
+    leaderboard,
     local_programs,
     policy,
+    tasks,
     to_json,
     to_markdown,
 )
@@ -37,6 +40,15 @@ def test_the_same_seeds_give_the_same_bytes_and_other_seeds_other_ones():
     other = evaluate(Random(), [SMALL, NOISY], seeds=[4])
     assert to_json(one) == to_json(two) and to_markdown(one) == to_markdown(two)
     assert to_json(one) != to_json(other)
+
+
+def test_the_leaderboards_episodes_are_reproduced_byte_for_byte():
+    """The committed results name every episode; rerun two of them here."""
+    for name in ("random", "learned"):
+        saved = json.loads((DOCS / "benchmark" / f"{name}.json").read_text())
+        again = evaluate(policy(name), tasks("star-100"), seeds=[0])
+        first = saved["tasks"]["star-100"]["episodes"][0]
+        assert json.dumps(again["tasks"]["star-100"]["episodes"][0]) == json.dumps(first)
 
 
 def test_what_a_policy_broadcasts_changes_what_robots_hear_never_where_they_go():
@@ -140,6 +152,17 @@ def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):
 def test_without_a_policy_the_command_lists_the_tasks(capsys):
     assert main(["benchmark"]) == 0
     assert capsys.readouterr().out == table()
+
+
+def test_docs_show_the_suite_and_the_leaderboard_its_results_make():
+    page = (DOCS / "benchmark.md").read_text()
+    assert table() in page
+    rows = [json.loads((DOCS / "benchmark" / f"{name}.json").read_text())
+            for name in ("random", *local_programs(), "learned")]  # fmt: skip
+    assert leaderboard(rows) in page
+    assert leaderboard(rows) in (DOCS.parent / "README.md").read_text()
+    for row in rows:
+        assert list(row["tasks"]) == list(TASKS)
 
 
 def test_context_gives_each_episode_its_own_generator():
