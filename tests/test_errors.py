@@ -111,7 +111,7 @@ def bad_files(tmp_path_factory) -> Path:
 
 def swarmshape(folder: Path, command: str) -> subprocess.CompletedProcess:
     args = shlex.split(command.replace("{dir}", str(folder)))
-    if args[0] not in ("sweep", "plot", "edit"):
+    if args[0] not in ("sweep", "plot", "edit", "benchmark"):
         args += ["--headless"] + ([] if "--max-steps" in args else ["--max-steps", "3"])
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(folder)}
     return subprocess.run(

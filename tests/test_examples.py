@@ -18,7 +18,10 @@ PROMISES = {
     "learn_random.py": "a frame of shape (400, 640, 3)",
     "learn_scripted.py": "shape formed: True, coverage 100%",
     "learn_cem.py": "coverage with the trained policy: 33% (from 0%)",
+    "learn_benchmark.py": "weights in learned.json",
 }
+ARGUMENTS = {"learn_benchmark.py": ["--tiny"]}
+"""What an example needs to finish in seconds (the full training takes most of an hour)."""
 
 
 def test_every_example_is_listed_here():
@@ -29,7 +32,7 @@ def test_every_example_is_listed_here():
 def test_the_example_runs(name, tmp_path):
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
     result = subprocess.run(
-        [sys.executable, str(EXAMPLES / name)],
+        [sys.executable, str(EXAMPLES / name), *ARGUMENTS.get(name, [])],
         capture_output=True,
         text=True,
         cwd=tmp_path,

@@ -28,9 +28,11 @@ ALLOWED = {
                     "swarmshape.io", "swarmshape.experiments", "swarmshape.runs",
                     "swarmshape.config"},
     # the learning environment draws through ui/screen.py, loaded only to render
-    "env": {"numpy", "gymnasium", "pettingzoo", "swarmshape.core",
+    # the benchmark drives the built-in local programs as policies, by name; its learned
+    # policy reads the shape as a distance field (scipy.ndimage)
+    "env": {"numpy", "scipy", "gymnasium", "pettingzoo", "swarmshape.core",
             "swarmshape.errors", "swarmshape.io", "swarmshape.env", "swarmshape.runs",
-            "swarmshape.config", "swarmshape.ui.screen"},
+            "swarmshape.config", "swarmshape.strategies", "swarmshape.ui.screen"},
 }  # fmt: skip
 
 

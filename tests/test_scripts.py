@@ -52,3 +52,10 @@ def test_the_window_pictures_are_made_anew(tmp_path):
         with Image.open(tmp_path / name) as image:
             assert image.size == (1280, 800)
             assert len(image.convert("RGB").getcolors(1 << 16)) > 10, "a drawn window"
+
+
+def test_the_benchmarks_tables_are_the_ones_its_results_make():
+    for script in ("leaderboard.py", "generalisation.py"):
+        command = [sys.executable, f"scripts/{script}", "--check"]
+        done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stdout + done.stderr

@@ -34,7 +34,7 @@ from swarmshape.errors import InputError, SettingError, SettingWarning
 from swarmshape.runs import load_world, resume
 from swarmshape.session import Outputs, Session, preview_text
 
-COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check")
+COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check", "benchmark")
 NOT_FORMED = 3
 """Exit status of a headless run that stopped before its shape formed (and of a failed check)."""
 FLAGGED = tuple(spec for spec in SETTINGS if spec.extra.get("flag", True))
@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="swarmshape",
         description="Watch a swarm of square robots organise itself into a shape.",
-        epilog="Commands: run (the default), edit, sweep, plot, strategies and check. "
+        epilog="Commands: run (the default), edit, sweep, plot, strategies, check and benchmark. "
         "See 'swarmshape COMMAND --help'.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
@@ -130,7 +130,47 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument(
         "--max-steps", type=int, default=20_000, help="steps to form each shape (default 20000)"
     )
+    bench = commands.add_parser(
+        "benchmark",
+        help="score a policy on the shape-formation-v1 tasks (needs the learn extra)",
+        description="Run a policy on the benchmark's tasks and seeds; print its results as a "
+        "Markdown table and its leaderboard row. Without a policy, list the tasks.",
+    )
+    bench.add_argument(
+        "policy",
+        nargs="?",
+        help="random, learned, a local program (swarmshape strategies lists them), or "
+        "path/to/file.py:Name or module:Name (a class, made with no arguments, or a policy)",
+    )
+    bench.add_argument("--tasks", help="task names, comma-separated (default: every task)")
+    bench.add_argument(
+        "--seeds", type=_seeds, help="seeds, e.g. 0-9 or 1,4,7 (default: each task's own)"
+    )
+    bench.add_argument("--json", type=Path, help="write the results as JSON to this file")
+    bench.add_argument("--markdown", type=Path, help="write the results' table to this file")
+    bench.add_argument("--force", action="store_true", help="let outputs replace files")
     return parser
+
+
+def _seeds(text: str) -> list[int]:
+    """``0-9``, ``1,4,7`` or both (``0-2,9``): seeds in the order given, each once."""
+    seeds: list[int] = []
+    for part in text.split(","):
+        low, dash, high = part.strip().partition("-")
+        try:
+            first, last = int(low), int(high if dash else low)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected seeds like 0-9 or 1,4,7, got {text!r}"
+            ) from None
+        if not 0 <= first <= last < 2**63:
+            raise argparse.ArgumentTypeError(
+                f"seeds are whole numbers from 0 to 2**63 - 1, low-high ascending; got {part!r}"
+            )
+        if last - first >= 100_000:
+            raise argparse.ArgumentTypeError(f"at most 100,000 seeds in a range, got {part!r}")
+        seeds += [seed for seed in range(first, last + 1) if seed not in seeds]
+    return seeds
 
 
 def _shared_options() -> argparse.ArgumentParser:
@@ -506,6 +546,38 @@ def run_check(args: argparse.Namespace) -> int:
     return 0 if report.clean else NOT_FORMED
 
 
+def run_benchmark(args: argparse.Namespace) -> int:
+    try:
+        from swarmshape.env import benchmark
+    except ImportError as error:  # without the learn extra
+        raise InputError(f"swarmshape benchmark: {error}") from None
+    from swarmshape.io.files import check_output, distinct_outputs, write_text
+
+    chosen = benchmark.tasks(args.tasks)
+    if args.policy is None:
+        print(benchmark.suite.table(chosen), end="")
+        return 0
+    outputs = [(flag, path) for flag, path in (("--json", args.json),
+               ("--markdown", args.markdown)) if path is not None]  # fmt: skip
+    for flag, path in outputs:
+        check_output(path, flag, may_replace=args.force)
+    distinct_outputs(outputs)
+    policy = benchmark.policy(args.policy)
+
+    def progress(task: str, seconds: float) -> None:
+        print(f"swarmshape: {task} done in {seconds:,.0f} s", file=sys.stderr)
+
+    results = benchmark.evaluate(policy, chosen, args.seeds, progress)
+    table = benchmark.to_markdown(results)
+    print(table)
+    print(benchmark.leaderboard([results]), end="")
+    if args.json is not None:
+        write_text(args.json, benchmark.to_json(results))
+    if args.markdown is not None:
+        write_text(args.markdown, table)
+    return 0
+
+
 COMMAND_FUNCTIONS = {
     "run": run_session,
     "edit": run_session,
@@ -513,4 +585,5 @@ COMMAND_FUNCTIONS = {
     "plot": run_plot,
     "strategies": list_strategies,
     "check": run_check,
+    "benchmark": run_benchmark,
 }

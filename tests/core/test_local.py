@@ -83,6 +83,15 @@ def test_a_move_into_a_taken_cell_does_not_happen_and_odometry_says_so():
     assert (swarm.driver.memory.went == swarm.cell[:, 0] - start[:, 0]).all()
 
 
+def test_a_move_the_lattice_refuses_is_counted_as_refused():
+    world = world_of(np.ones((1, 3), dtype=bool), 2, arena=(12, 6))
+    swarm = Swarm(world, East(), seed=1, start=np.array([[11, 4], [5, 4]]))
+    for _ in range(5):
+        swarm.step()
+    # the first robot asks for the wall every step; the second is under way, its claims won
+    assert swarm.driver.refused == 5
+
+
 class EastThenSouth(Program):
     """East until the robot has gone (or is on its way to) 10 cells, then south: asked to
     turn while under way, it must brake and stop first."""

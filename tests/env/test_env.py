@@ -24,7 +24,7 @@ from swarmshape.core.perception import Perception
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import LOST, STALLED
 from swarmshape.core.swarm import Params, Swarm
-from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.core.world import GroupSpec, build_world, packed_start
 from swarmshape.env.observe import OWN
 from swarmshape.errors import InputError
 from swarmshape.runs import Runner, start_swarm
@@ -256,6 +256,14 @@ def test_any_callable_can_be_the_reward():
     plain.reset(seed=1)
     with pytest.raises(ValueError, match="the reward gave shape"):
         plain.step(np.zeros(plain.num_envs, dtype=np.int64))
+
+
+@pytest.mark.parametrize("shape", ["shapes/star.png", SQUARE])
+def test_robots_may_start_packed_against_the_seeds(shape):
+    vec = learn.vector_env(shape, cells=8 if isinstance(shape, str) else None, start="packed")
+    vec.reset(seed=1)
+    swarm = vec.episode.swarm
+    assert (swarm.cell == packed_start(swarm.world)).all()
 
 
 def test_an_episode_is_1000_steps_unless_told():

@@ -178,6 +178,9 @@ class LocalControl:
         self.reach = swarm.params.senses.reach()
         self.sent = 0
         self.lost = 0
+        self.refused = 0
+        """Moves asked for that claimed no cell: into a taken cell, or lost to another robot
+        claiming the same one (the collisions the lattice refused)."""
         self.quiet_steps = 0
         self.links: tuple[np.ndarray, np.ndarray] | None = None
         """The last perception's heard links, ``(owner, other)`` (other ``>= n``: a seed), kept
@@ -262,7 +265,8 @@ class LocalControl:
         keys = swarm.lattice.key(swarm.cell[robots] + STEPS[swarm.direction[robots]] * ahead)
         entering = keys + swarm.lattice.offsets[directions]
         allowed = swarm.enterable(entering, swarm.group[robots], directions)
-        swarm.claim(robots[allowed], directions[allowed], keys[allowed])
+        won = swarm.claim(robots[allowed], directions[allowed], keys[allowed])
+        self.refused += len(robots) - len(won)
         still = not (swarm.ahead > 0).any() and not changed
         self.quiet_steps = self.quiet_steps + 1 if still else 0
 
@@ -379,6 +383,7 @@ class LocalControl:
             "last_cell": self.last_cell,
             "sent": self.sent,
             "lost": self.lost,
+            "refused": self.refused,
             "quiet_steps": self.quiet_steps,
         }
 
@@ -393,6 +398,8 @@ class LocalControl:
         self.last_cell = saved.array("last_cell", np.int64, (n, 2))
         self.sent = saved.integer("sent", 0)
         self.lost = saved.integer("lost", 0)
+        # counted since state version 4 began: older files of that version lack it
+        self.refused = saved.integer("refused", 0) if saved.has("refused") else 0
         self.quiet_steps = saved.integer("quiet_steps", 0)
 
 

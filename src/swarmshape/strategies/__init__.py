@@ -31,7 +31,7 @@ ENTRY_POINTS = "swarmshape.strategies"
 
 REGISTRY: dict[str, type[Plugin]] = {}
 LOADED: dict[Path, ModuleType] = {}
-"""Strategy files run so far, by their resolved paths."""
+"""Files of code run so far (strategies, benchmark policies), by their resolved paths."""
 
 
 def register(cls: type[Plugin]) -> type[Plugin]:
@@ -93,32 +93,34 @@ def owners_of(option_name: str) -> list[str]:
 
 def _import(spec: str) -> type[Plugin]:
     with PluginCode.named(spec).running(" as it was loaded"):  # wherever it is first looked up
-        return _imported(spec)
+        return load(spec)
 
 
-def _imported(spec: str) -> type[Plugin]:
+def load(spec: str, what: str = "strategy") -> Any:
+    """What ``path/to/file.py:Name`` or ``package.module:Name`` names (a strategy, or any
+    other code a user names the same way: `what` it is, for the messages)."""
     module_name, _, attribute = spec.rpartition(":")
     if module_name.endswith(".py"):
-        module = _load_file(Path(module_name), spec)
+        module = _load_file(Path(module_name), spec, what)
     else:
         try:
             module = importlib.import_module(module_name)
         except (ImportError, ValueError, TypeError) as error:  # also "" and ".relative"
-            raise InputError(f"strategy {spec!r}: cannot import {module_name} ({error})") from None
+            raise InputError(f"{what} {spec!r}: cannot import {module_name} ({error})") from None
     try:
         return getattr(module, attribute)
     except AttributeError:
-        raise InputError(f"strategy {spec!r}: {module_name} has no {attribute}") from None
+        raise InputError(f"{what} {spec!r}: {module_name} has no {attribute}") from None
 
 
-def _load_file(path: Path, spec: str) -> ModuleType:
-    """Run a strategy file the user named, as a module of its own."""
+def _load_file(path: Path, spec: str, what: str) -> ModuleType:
+    """Run a file the user named, as a module of its own."""
     try:
         is_file = path.is_file()
     except OSError as error:  # a name too long to look up, say
-        raise InputError(f"strategy {spec!r}: cannot read {path} ({error.strerror})") from None
+        raise InputError(f"{what} {spec!r}: cannot read {path} ({error.strerror})") from None
     if not is_file:
-        raise InputError(f"strategy {spec!r}: no such file {path}")
+        raise InputError(f"{what} {spec!r}: no such file {path}")
     key = path.resolve()
     if key not in LOADED:  # once per process: a file may keep state at module level
         name = f"swarmshape_strategy_{path.stem}"

@@ -51,8 +51,9 @@ gradient, whether it is localised, its position estimate in 1/`FIXED` cells, its
 direction a blocked follower waits to move in (0 if none)."""
 
 FIXED = 1024
-INFINITE = 1 << 30
-"""The gradient of a robot connected to no seed."""
+INFINITE = 1 << 23
+"""The gradient of a robot connected to no seed: above any hop count, and below 2**24, so that
+the broadcast holds exactly in a learning environment's float32 observation."""
 
 NEVER = 1 << 30
 """Steps since a robot last missed a message, for one that never has."""
