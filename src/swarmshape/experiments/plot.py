@@ -25,7 +25,15 @@ from swarmshape.experiments.results import read_rows
 from swarmshape.io.files import atomic_write
 
 PLOTS = ("coverage", "steps")
-NEEDED = ("config.strategy", "agents", "steps", "steps_run", "curve_every", "coverage_curve")
+NEEDED = (
+    "config.shape",
+    "config.strategy",
+    "agents",
+    "steps",
+    "steps_run",
+    "curve_every",
+    "coverage_curve",
+)
 """Columns the plots read (besides the other ``config.`` ones, which tell settings apart)."""
 LINES = ("-", "--", ":", "-.")
 MARKERS = ("o", "s", "^", "D", "v", "P", "X")
