@@ -133,7 +133,8 @@ class Renderer:
         corner = np.floor((swarm.positions() - 0.5) * cell + np.array(origin) + gap).astype(int)
         self._lost_marks(surface, swarm, cell, origin)
         corner = corner[here]
-        kind, colours = _colours(swarm)
+        shown = swarm.driver.shown()  # asked once a frame: a driver may work it out each time
+        kind, colours = _colours(swarm, shown)
         kind = kind[here]
         order = np.argsort(kind, kind="stable")
         bounds = np.searchsorted(kind[order], np.arange(len(colours) + 1))
@@ -142,7 +143,6 @@ class Renderer:
             if start < stop:  # one blit call per colour draws all its squares
                 square = self._square(cell - 2 * gap, colour)
                 surface.fblits(zip(repeat(square), corners[start:stop]))
-        shown = swarm.driver.shown()
         if shown is None or not overlays:
             return
         if "links" in overlays and shown.links is not None:
@@ -314,11 +314,10 @@ def legend(swarm: Swarm) -> list[Key]:
     ]
 
 
-def _colours(swarm: Swarm) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
-    """Each robot's colour index and the colours: by a local program's ``memory.state`` when it
-    names its `states`, else its group's colour shaded by what it is doing (stalled robots are
-    charcoal either way)."""
-    shown = shown_of(swarm)
+def _colours(swarm: Swarm, shown: Shown | None) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
+    """Each robot's colour index and the colours: by the states the driver `shown` names (a
+    local program's ``memory.state``), else its group's colour shaded by what it is doing
+    (stalled robots are charcoal either way)."""
     named = _named_states(shown)
     if shown is not None and shown.state is not None:
         colours = [colour for _, colour in named] + [STALLED_GREY]
