@@ -22,14 +22,15 @@ SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 
 # The suite's own pace: enough examples of each property to catch a rule broken anywhere common,
 # in the few minutes a change's test run may take. `--slow` runs twenty times as many, and the
-# tests marked slow (large swarms, long regressions): what a night run is for. CI checks the
-# same examples every run, so a red build always reproduces; runs elsewhere draw new ones and
-# so keep exploring.
+# tests marked slow (large swarms, long regressions): what a night run is for. `scripts/test`
+# (and so CI) checks the same examples every run ("ci"), so a change is judged on what it
+# changed and a red build always reproduces; plain `pytest` draws new ones and so keeps
+# exploring.
 settings.register_profile("quick", max_examples=50)
 settings.register_profile("ci", parent=settings.get_profile("quick"), derandomize=True,
                           print_blob=True)  # fmt: skip
 settings.register_profile("slow", max_examples=1000)
-settings.load_profile("ci" if os.environ.get("CI") else "quick")
+settings.load_profile(os.environ.get("SWARMSHAPE_HYPOTHESIS_PROFILE", "quick"))
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

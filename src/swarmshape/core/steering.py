@@ -635,7 +635,9 @@ class Steering:
         self, starters: np.ndarray, stuck: np.ndarray, steps: _Steps, winners: np.ndarray
     ) -> None:
         """Moving on resets a mover's wait; waiting behind something at rest adds to it, and
-        at `patience` steps the mover plans afresh."""
+        from `patience` steps on the mover plans afresh, with even odds each step. Two movers
+        in each other's way that all planned afresh in the same step each went round the other
+        side by side, and met again, for good (the paper's movers of two groups passing)."""
         swarm = self.swarm
         moved = np.zeros(len(swarm.state), dtype=bool)
         moved[winners] = True
@@ -644,7 +646,8 @@ class Steering:
         robot = np.maximum(steps.blocker, 0)
         at_rest = (steps.blocker < 0) | (swarm.ahead[robot] == 0)
         self.blocked[steps.blocked[at_rest]] += 1
-        replan = starters[self.blocked[starters] == self.swarm.params.patience]
+        waited = starters[self.blocked[starters] >= self.swarm.params.patience]
+        replan = waited[swarm.rng.random(len(waited)) < 0.5]
         self.planner.forget(np.concatenate([replan, stuck]))
 
     def _plan(self, starters: np.ndarray) -> None:
