@@ -262,3 +262,21 @@ def test_a_strategy_that_keeps_what_a_state_cannot_hold_is_told_before_the_run(t
         "in self.table, which a state file cannot hold: keep numbers, text and numpy arrays (or "
         "lists of them), or define snapshot() and restore()"
     )
+
+
+class TakesNoOptions(Optimal):
+    name = "takes-no-options"
+
+    def __init__(self):
+        super().__init__()
+
+
+def test_a_constructor_without_options_is_refused_in_one_line(capsys):
+    """Issue 29: a strategy whose __init__ took no options failed inside swarmshape's call of
+    it: "internal error, please report it"."""
+    spec = "tests.test_check:TakesNoOptions"
+    for command in ([str(SHAPES / "line.png"), "--headless", "--strategy", spec],
+                    ["check", spec, "--runs", "1"]):  # fmt: skip
+        assert main(command) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and "its __init__ must take its options" in err[0], err

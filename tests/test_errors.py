@@ -104,6 +104,8 @@ def bad_files(tmp_path_factory) -> Path:
         "        sys.exit(0)\n"
         "class Loops(Writes):\n    name = 'loops'\n    def on_step(self, swarm):\n"
         "        while True: pass\n"
+        "class Bare(Writes):\n    name = 'bare'\n    def __init__(self):\n"
+        "        super().__init__()\n"
     )
     (folder / "import_boom.py").write_text("raise RuntimeError('boom')\n")
     return folder

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import importlib.util
+import inspect
 import sys
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -79,6 +80,13 @@ def create(strategy: str | type[Plugin], options: Any = None) -> Plugin:
     """A new plug-in (by name or class) with its `options` (an instance of its ``Options``;
     None: the defaults)."""
     cls = strategy if isinstance(strategy, type) else get(strategy)
+    try:  # the contract of a plug-in's constructor, checked before its code runs
+        inspect.signature(cls).bind(options)
+    except TypeError:
+        raise InputError(
+            f"strategy {cls.name!r} cannot be made: its __init__ must take its options, "
+            "as in def __init__(self, options=None), and pass them to super().__init__"
+        ) from None
     return cls(options)
 
 
