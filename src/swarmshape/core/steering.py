@@ -635,9 +635,10 @@ class Steering:
         self, starters: np.ndarray, stuck: np.ndarray, steps: _Steps, winners: np.ndarray
     ) -> None:
         """Moving on resets a mover's wait; waiting behind something at rest adds to it, and
-        from `patience` steps on the mover plans afresh, with even odds each step. Two movers
-        in each other's way that all planned afresh in the same step each went round the other
-        side by side, and met again, for good (the paper's movers of two groups passing)."""
+        at `patience` steps the mover plans afresh. Of two movers in each other's way that
+        would plan afresh in the same step, only the lower-numbered one does, and the other
+        keeps its way: planning together, each went round the other side by side, met again,
+        and so for good (the paper's movers of two groups passing)."""
         swarm = self.swarm
         moved = np.zeros(len(swarm.state), dtype=bool)
         moved[winners] = True
@@ -646,8 +647,15 @@ class Steering:
         robot = np.maximum(steps.blocker, 0)
         at_rest = (steps.blocker < 0) | (swarm.ahead[robot] == 0)
         self.blocked[steps.blocked[at_rest]] += 1
-        waited = starters[self.blocked[starters] >= self.swarm.params.patience]
-        replan = waited[swarm.rng.random(len(waited)) < 0.5]
+        replan = starters[self.blocked[starters] == self.swarm.params.patience]
+        waits_for = np.full(len(swarm.state), -1, dtype=np.int64)
+        waits_for[steps.blocked] = steps.blocker
+        other = waits_for[replan]
+        both = np.zeros(len(swarm.state), dtype=bool)
+        both[replan] = True
+        mutual = (other >= 0) & both[np.maximum(other, 0)]
+        mutual &= waits_for[np.maximum(other, 0)] == replan
+        replan = replan[~mutual | (replan < other)]
         self.planner.forget(np.concatenate([replan, stuck]))
 
     def _plan(self, starters: np.ndarray) -> None:
