@@ -502,10 +502,10 @@ class Steering:
     def _make_way(self, blocked: np.ndarray, blocker: np.ndarray) -> np.ndarray:
         """Resolve what stands in blocked movers' way; return idle robots asked to step aside.
 
-        Idle robots (waiting or wandering, at rest) step aside. A wanderer that cannot, caught
-        inside its own shape or in a pocket of it with no free cell to step to, takes the
-        mover's target instead (`_hand_over`): under every motion, or a wanderer left in a hole
-        of a shape re-formed smaller blocks the paper's one mover for ever. Under
+        Idle robots (waiting or wandering, at rest) step aside. One that cannot, caught inside
+        its own shape or in a pocket of it with no free cell to step to, takes the mover's
+        target instead (`_hand_over`): under every motion, or a wanderer left in a hole of a
+        shape re-formed smaller blocks the paper's one mover for ever. Under
         `Motion.SWAP` a ring of
         resting movers each waiting for the next passes its targets round; two movers trade
         targets when that shortens their trips (`_trips`); a settled robot of the same group
@@ -520,9 +520,8 @@ class Steering:
         at_rest = swarm.ahead[robot] == 0
         idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
-        wanders = idle & (state == WANDERING)  # a waiting robot may still be sent elsewhere
         trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
-        caught = wanders & same_group & trapped
+        caught = idle & same_group & trapped
         if caught.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
             return self._make_way(blocked[~caught], blocker[~caught])
@@ -573,17 +572,21 @@ class Steering:
         lattice = self.swarm.lattice
         return lattice.owner[lattice.key(rows(self.swarm.cell, robots))] == self.swarm.group[robots]
 
-    def _hand_over(self, movers: np.ndarray, wanderers: np.ndarray) -> None:
-        """A wanderer caught inside its shape, in a mover's way, takes the mover's target and
-        the mover wanders in its place. Among movers and settled robots the wanderer finds no
-        free cell to step aside into: a block with 5 % stalled early, under `random`, jammed
-        at 48 % behind such wanderers. The wanderer stands one cell further along the mover's
-        way, so every hand-over shortens the trips left and they cannot go on for ever; the
-        mover it replaces may be in the next mover's way in turn, and so on out. The wanderer
-        goes on round whatever the mover was going round, as after a swap."""
-        self.assign(wanderers, self.target[movers])
-        self.routed[wanderers] = self.routed[movers]
+    def _hand_over(self, movers: np.ndarray, idle: np.ndarray) -> None:
+        """An idle robot caught inside its shape, in a mover's way, takes the mover's target,
+        and the mover waits or wanders in its place, as it did. Among movers and settled robots
+        the idle robot finds no free cell to step aside into: a block with 5 % stalled early,
+        under `random`, jammed at 48 % behind such wanderers, and two random shapes under
+        `random` never formed behind a waiting one (`scripts/faults.py --heal`). The idle robot
+        stands one cell further along the mover's way, so every hand-over shortens the trips
+        left and they cannot go on for ever; the mover it replaces may be in the next mover's
+        way in turn, and so on out. The idle robot goes on round whatever the mover was going
+        round, as after a swap."""
+        waited = self.swarm.state[idle] == WAITING
+        self.assign(idle, self.target[movers])
+        self.routed[idle] = self.routed[movers]
         self.release(movers)
+        self.swarm.wait(movers[waited])
 
     def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
         """The settled robot takes the mover's target and moves on; the mover takes its cell."""
