@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import html
 import json
 import re
 import shlex
@@ -289,3 +290,31 @@ def test_the_faults_shown_are_read_as_their_comments_say(folder):
         {"step": 300, "kind": "remove", "amount": 0.2},
         {"step": 600, "kind": "stall", "amount": 10, "region": [24, 14, 8, 8]},
     ]
+
+
+def test_the_api_reference_builds_without_a_warning_and_covers_the_plugin_api(tmp_path):
+    """scripts/docs.py, as the README says; every hook of both plug-in kinds, `Perception`,
+    `Blueprint` and every run setting are in it."""
+    import importlib.util
+
+    import swarmshape
+    from swarmshape.config import SETTINGS
+
+    assert "scripts/docs.py" in README
+    spec = importlib.util.spec_from_file_location("docs", ROOT / "scripts" / "docs.py")
+    docs = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(docs)
+    assert docs.build(tmp_path) == []
+    page = (tmp_path / "swarmshape.html").read_text()
+    hooks = [
+        f"{kind.__name__}.{name}"
+        for kind in (swarmshape.Strategy, swarmshape.Program)
+        for name in vars(kind)
+        if not name.startswith("_") and callable(getattr(kind, name))
+    ]
+    assert {"Strategy.on_step", "Strategy.snapshot", "Program.act"} <= set(hooks)
+    for name in ["Perception", "Blueprint", "RunConfig", *hooks]:
+        assert f'id="{name}"' in page, name
+    settings = html.unescape(re.sub(r"<[^>]+>", "", page[page.index('id="RunConfig"') :]))
+    for setting in SETTINGS:
+        assert f"{setting.name}: {setting.help}" in settings, setting.name
