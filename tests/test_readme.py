@@ -12,6 +12,7 @@ import json
 import re
 import shlex
 import shutil
+import sys
 from pathlib import Path
 
 import pygame
@@ -295,16 +296,11 @@ def test_the_faults_shown_are_read_as_their_comments_say(folder):
 def test_the_api_reference_builds_without_a_warning_and_covers_the_plugin_api(tmp_path):
     """scripts/docs.py, as the README says; every hook of both plug-in kinds, `Perception`,
     `Blueprint` and every run setting are in it."""
-    import importlib.util
-
     import swarmshape
     from swarmshape.config import SETTINGS
 
     assert "scripts/docs.py" in README
-    spec = importlib.util.spec_from_file_location("docs", ROOT / "scripts" / "docs.py")
-    docs = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(docs)
-    assert docs.build(tmp_path) == []
+    assert script("docs").build(tmp_path) == []
     page = (tmp_path / "swarmshape.html").read_text()
     hooks = [
         f"{kind.__name__}.{name}"
@@ -318,3 +314,43 @@ def test_the_api_reference_builds_without_a_warning_and_covers_the_plugin_api(tm
     settings = html.unescape(re.sub(r"<[^>]+>", "", page[page.index('id="RunConfig"') :]))
     for setting in SETTINGS:
         assert f"{setting.name}: {setting.help}" in settings, setting.name
+
+
+def test_the_letter_k_forms_in_the_steps_the_readme_gives(folder, capsys):
+    """The self-assembly paragraph's own command, with the seed the fixture gives."""
+    steps, command = re.search(
+        r"every seed takes the same ([\d,]+) steps: `([^`]+)`", README
+    ).groups()
+    status, out, err = run(" ".join(command.split()), capsys)
+    assert status == 0, err
+    assert f"formed in {steps} steps" in out
+
+
+def test_the_suite_runs_as_many_examples_a_property_as_the_readme_says():
+    from hypothesis import settings
+
+    quick = re.search(r"(\d+) examples a property", README)
+    assert quick and settings.get_profile("quick").max_examples == int(quick.group(1))
+    assert "a thousand examples each" in README
+    assert settings.get_profile("slow").max_examples == 1000
+
+
+def script(name: str):
+    """A script of scripts/ as a module (they are not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # a dataclass looks its module up there
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_optimal_disc_forms_in_the_steps_of_the_strategies_and_performance_tables():
+    """The 1,000-cell disc is the one benchmark row cheap enough to run here (about a second)."""
+    bench = script("bench")
+    row = bench.formation(bench.Case("disc", 1000))
+    steps, ratio = re.search(r"\| `optimal` \|[^|]*\| ([\d,]+) \(([\d.]+)x", README).groups()
+    table = f"| disc | 1,000 | {row['steps_90']} / {row['steps']:,} | {row['bound']} exact | "
+    assert (int(steps.replace(",", "")), ratio) == (row["steps"], f"{row['ratio']:.2f}")
+    assert table + f"{row['ratio']:.2f}x |" in README
