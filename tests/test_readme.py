@@ -158,8 +158,15 @@ def _preview(status, out, err, folder):
 
 
 def _recorded(status, out, err, folder):
+    """A GIF, and the same as MP4, of the sizes the README gives (within 5 %: encoders differ
+    a little between versions)."""
     assert status == 0, err
     assert Image.open(folder / "star.gif").n_frames > 1
+    assert cli.main(["shapes/star.png", "--headless", "--seed", "1", "--record", "star.mp4",
+                     "--record-every", "3"]) == 0  # fmt: skip
+    sizes = re.search(r"the star above is (\d+) KB as MP4 and (\d+) KB as GIF", README)
+    for name, size in zip(("star.mp4", "star.gif"), sizes.groups(), strict=True):
+        assert abs((folder / name).stat().st_size / 1000 / int(size) - 1) < 0.05, name
 
 
 def _traced(status, out, err, folder):
@@ -354,3 +361,60 @@ def test_the_optimal_disc_forms_in_the_steps_of_the_strategies_and_performance_t
     table = f"| disc | 1,000 | {row['steps_90']} / {row['steps']:,} | {row['bound']} exact | "
     assert (int(steps.replace(",", "")), ratio) == (row["steps"], f"{row['ratio']:.2f}")
     assert table + f"{row['ratio']:.2f}x |" in README
+
+
+def test_the_shipped_sweeps_hold_the_runs_the_readme_counts():
+    def sweep(name: str):
+        return read_sweep(ROOT / "sweeps" / f"{name}.toml")
+
+    early = [sweep("early-faults"), sweep("early-stalls")]
+    shapes, runs, strategies = re.search(
+        r"strike\s+(\w+) shipped shapes while they form \((\d+) runs, all (\w+) strategies",
+        README,
+    ).groups()
+    assert sum(s.count for s in early) == int(runs)
+    for each in early:
+        assert len(each.values["shape"]) == WORDS[shapes]
+        assert len(each.values["strategy"]) == WORDS[strategies]
+    noise = sweep("self-assembly-noise")
+    assert "59 of 60 with coverage 1.0" in README and noise.count == 60
+    assert "ten seeds each" in README and list(noise.seeds) == list(range(10))
+    assert "all 60 runs of the same\nten seeds" in README
+    assert sweep("self-assembly-noise-1024").count == 60
+    assert "seeds 0 to 2" in README and list(sweep("local-vs-optimal").seeds) == [0, 1, 2]
+
+
+WORDS = {"three": 3, "eight": 8}
+
+
+@pytest.mark.parametrize("strategy", ["optimal", "local-swap"])
+def test_the_98_robot_letter_s_rows_are_what_the_runs_give(strategy):
+    """The local-against-central table's small rows (its 1,018-robot rows take minutes)."""
+    import swarmshape
+
+    runs = []
+    for seed in (0, 1, 2):
+        config = configure(ROOT / "shapes" / "letter-s.png", cells=14, strategy=strategy, seed=seed)
+        swarm = swarmshape.run(swarmshape.build(config), max_steps=config.max_steps)
+        runs.append(swarmshape.run_metrics(swarm))
+
+    assert {m["agents"] for m in runs} == {98}
+    cells = re.search(rf"^\| 98 \| `{strategy}` \|(.*)\|$", README, re.M).group(1).split("|")
+    for key, said in zip(COLUMNS, cells, strict=True):
+        values = sorted({m[key] for m in runs})
+        assert said.strip() == spread(values[0], values[-1], said), key
+
+
+COLUMNS = ("steps", "makespan_ratio", "distance_ratio", "messages")
+"""The columns of the table of local against central runs, after the robots and the strategy."""
+
+
+def spread(low: float, high: float, said: str) -> str:
+    """`low` to `high` (or one value) as `said` prints them: as many decimals, or thousands."""
+    decimals = len(said.split()[0].partition(".")[2])
+    if decimals:
+        low_text, high_text = f"{low:.{decimals}f}", f"{high:.{decimals}f}"
+    else:
+        step = 1000 if said.split()[0].endswith(",000") else 1
+        low_text, high_text = (f"{round(v / step) * step:,}" for v in (low, high))
+    return low_text if low_text == high_text else f"{low_text} to {high_text}"
