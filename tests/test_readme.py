@@ -253,6 +253,25 @@ def test_the_commands_of_a_code_block_run_in_turn_as_the_readme_says(block, fold
             PROMISES[command](*run(command, capsys), folder)
 
 
+SNIPPETS = {
+    "python": [
+        "import numpy as np",  # the strategy: saved as my_strategies.py and checked
+        "from typing import ClassVar",  # the local program: examples/my_program.py
+        "import swarmshape",  # the library
+        "from swarmshape.env import",  # the learning environment
+    ],
+    "toml": ['name = "two squares"', "failure_rate = 0.0001"],
+}
+"""How each snippet of the README begins; each is run or read by a test here."""
+
+
+def test_every_snippet_of_the_readme_is_run_or_read_here():
+    for language, openings in SNIPPETS.items():
+        for block in blocks(language):
+            assert sum(block.startswith(o) for o in openings) == 1, block.splitlines()[0]
+        assert len(blocks(language)) == len(openings)
+
+
 def snippet(language: str, opening: str) -> str:
     """The README's `language` block that begins with `opening`."""
     return next(block for block in blocks(language) if block.startswith(opening))
