@@ -11,7 +11,7 @@ rest to rest under those limits of the bottleneck trip, exact or a proved bound 
 ratios divide by trip length over the top speed, which ignores acceleration and so is a
 lower bound than today's: the new ratios are the stricter of the two.
 
-`--quick` runs the 1,000-robot rows and the fixed-cost rows only (about a minute);
+`--quick` runs the 1,000-robot rows and the fixed-cost rows only (about 15 s);
 `--million` adds a 1,000,000-robot disc run from the shell under a time cap (`--cap`);
 `--caps` runs only the inputs at the caps (issue 29): shapes fitted to few robots, the largest
 arena, the largest pictures, a million start cells and a state that unpacks to 3 GB, each from

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -20,6 +21,22 @@ PROMISES = {
     "learn_cem.py": "coverage with the trained policy: 33% (from 0%)",
     "learn_benchmark.py": "weights in learned.json",
 }
+README = (EXAMPLES.parent / "README.md").read_text()
+SCRIPTED = re.search(
+    r"learn_scripted.py`.*?\((\d+)\s+robots, (\d+) steps, coverage (\d+%)\)", README, re.S
+)
+CEM = re.search(r"learn_cem.py`.*?from (\d+%) to (\d+%) .*?, and (.*?) on three\s", README, re.S)
+README_FIGURES = {
+    "learn_scripted.py": [
+        "{} robots, {} steps".format(*SCRIPTED.groups()),
+        f"coverage {SCRIPTED.group(3)}",
+    ],
+    "learn_cem.py": [
+        "coverage with the trained policy: {1} (from {0})".format(*CEM.groups()),
+        f"on three new episodes: {CEM.group(3)}",
+    ],
+}
+"""What the README says these examples print: the figures checked against their output."""
 ARGUMENTS = {"learn_benchmark.py": ["--tiny"]}
 """What an example needs to finish in seconds (the full training takes most of an hour)."""
 
@@ -40,7 +57,8 @@ def test_the_example_runs(name, tmp_path):
         timeout=120,
     )
     assert result.returncode == 0, result.stderr
-    assert PROMISES[name] in result.stdout
+    for promise in [PROMISES[name], *README_FIGURES.get(name, [])]:
+        assert promise in result.stdout
 
 
 def test_the_library_page_runs_as_written(monkeypatch):

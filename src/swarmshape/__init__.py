@@ -21,9 +21,9 @@ from typing import Any
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # keep pygame's banner off our output
 
 __all__ = [
-    "GroupSpec", "InputError", "Motion", "Observer", "Perception", "Pose", "Program", "RunConfig",
-    "Runner", "Senses", "Shape", "Slot", "State", "Strategy", "Swarm", "SwarmView", "World",
-    "available", "build", "build_world",
+    "Blueprint", "GroupSpec", "InputError", "Motion", "Observer", "Perception", "Pose", "Program",
+    "RunConfig", "Runner", "Senses", "Shape", "Slot", "State", "Strategy", "Swarm", "SwarmView",
+    "World", "available", "build", "build_world",
     "check_strategy", "configure", "load_grid", "register", "resume", "run", "run_metrics",
     "save", "start_swarm",
 ]  # fmt: skip
@@ -37,7 +37,7 @@ _HOMES = {
     "swarmshape.core.states": ("State",),
     "swarmshape.core.steering": ("Strategy", "SwarmView"),
     "swarmshape.core.local": ("Program", "Slot"),
-    "swarmshape.core.perception": ("Perception", "Senses"),
+    "swarmshape.core.perception": ("Perception", "Senses", "Blueprint"),
     "swarmshape.core.motion": ("Motion",),
     "swarmshape.strategies": ("register", "available"),
     "swarmshape.core.metrics": ("run_metrics",),

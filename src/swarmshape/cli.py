@@ -29,7 +29,7 @@ from swarmshape.config import (
     option_of,
 )
 from swarmshape.core.faults import FaultEvent, parse_event, parse_region
-from swarmshape.core.options import FLAG, PLUGIN_KINDS, Spec, specs
+from swarmshape.core.options import FLAG, PLUGIN_KINDS, Spec, plain, specs
 from swarmshape.errors import InputError, SettingError, SettingWarning
 from swarmshape.runs import load_world, resume
 from swarmshape.session import Outputs, Session, preview_text
@@ -251,7 +251,7 @@ def _shared_options() -> argparse.ArgumentParser:
 def _add_flag(parser: argparse._ActionsContainer, spec: Spec) -> None:
     """A run setting's flag: ``--max-speed X``, checked as the setting checks it."""
     flag = "--" + spec.name.replace("_", "-")
-    default = "" if spec.default is None else f" (default {_shown(spec.default)})"
+    default = "" if spec.default is None else f" (default {plain(spec.default)})"
     if spec.kind is FLAG:
         parser.add_argument(flag, action="store_true", default=None, help=spec.help)
         return
@@ -264,12 +264,6 @@ def _add_flag(parser: argparse._ActionsContainer, spec: Spec) -> None:
 
     metavar = spec.kind.metavar if spec.choices is None else "{" + ",".join(spec.choices) + "}"
     parser.add_argument(flag, type=parse, metavar=metavar, help=f"{spec.help}{default}")
-
-
-def _shown(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:g}"
-    return f"{value:,}" if isinstance(value, int) and not isinstance(value, bool) else str(value)
 
 
 def settings_table() -> str:
@@ -290,7 +284,7 @@ def settings_table() -> str:
         if spec.kind is not FLAG and spec.choices is None and spec.range_text():
             meaning += f"; {spec.describe()}"
         if spec.default not in (None, (), {}) and spec.kind is not FLAG:
-            meaning += f"; default {_shown(spec.default)}"
+            meaning += f"; default {plain(spec.default)}"
         if spec.readers != PLUGIN_KINDS:
             meaning += f"; read by {' and '.join(sorted(spec.readers))} plug-ins only"
         rows.append(f"| {cli} | {files} | {meaning} |")
@@ -526,7 +520,7 @@ def describe_plugin(name: str, cls: type) -> str:
     lines.append("options (--set NAME=VALUE; [options] in a scenario; options.NAME in a sweep):")
     width = max(len(spec.name) for spec in options)
     for spec in options:
-        lines.append(f"  {spec.name:<{width}}  {spec.describe()}, default {_shown(spec.default)}")
+        lines.append(f"  {spec.name:<{width}}  {spec.describe()}, default {plain(spec.default)}")
         if spec.help:
             lines.append(f"  {'':<{width}}  {spec.help}")
     return "\n".join(lines)

@@ -29,6 +29,7 @@ from swarmshape.core.options import (
     TEXT,
     Kind,
     Spec,
+    documented,
     from_values,
     option,
     same_as,
@@ -104,6 +105,7 @@ FAULTS = Kind(
 OPTIONS = Kind("a table of the plug-in's options", _options, _no_text, dict)
 
 
+@documented
 @dataclass(frozen=True)
 class RunConfig:
     """Everything that decides a run. The defaults here are the project's only defaults.

@@ -13,6 +13,7 @@ read the value (the command line, a scenario file) says where it came from.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -272,6 +273,20 @@ def specs(cls: type) -> tuple[Spec, ...]:
     return tuple(found.spec for found in _specs(cls))
 
 
+def documented(cls: type) -> type:
+    """A dataclass of settings whose docstring ends with every setting it declares (name,
+    meaning, what it takes, default): ``help()`` and the API reference then list them all, from
+    the declarations themselves."""
+    lines = []
+    for spec in specs(cls):
+        told = [spec.help, spec.describe()]
+        if spec.default not in (None, (), {}) and spec.kind is not FLAG:
+            told.append(f"default {plain(spec.default)}")
+        lines.append(f"- `{spec.name}`: " + "; ".join(part for part in told if part))
+    cls.__doc__ = inspect.cleandoc(cls.__doc__ or "") + "\n\nIts settings:\n\n" + "\n".join(lines)
+    return cls
+
+
 def checked(instance: Any) -> None:
     """Check every field of a dataclass instance against its spec, in place (for
     ``__post_init__``): values are coerced to their kinds, or a `SettingError` names the one
@@ -311,6 +326,13 @@ def _num(value: float) -> str:
     if value > 2**31 and (value + 1).bit_count() == 1:  # a type's limit: 2**63 - 1
         return f"2**{(value + 1).bit_length() - 1} - 1"
     return f"{value:,}"
+
+
+def plain(value: Any) -> str:
+    """A value as help texts print it: 0.5, 500,000, optimal."""
+    if isinstance(value, float):
+        return f"{value:g}"
+    return f"{value:,}" if isinstance(value, int) and not isinstance(value, bool) else str(value)
 
 
 def _shown(value: Any) -> str:

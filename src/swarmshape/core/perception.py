@@ -117,6 +117,7 @@ class Perception:
     number: np.ndarray
     """Each robot's number in its group, 0 up: a unique ID it was built with."""
     group: np.ndarray
+    """Each robot's group (an index into `blueprint.cells`)."""
     ready: np.ndarray
     """At rest on a cell centre: a move it asks for, any way, starts now."""
     heading: np.ndarray
