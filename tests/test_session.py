@@ -157,7 +157,7 @@ def test_a_run_with_two_warnings_shows_the_first_in_one_line(tmp_path, capsys):
     assert main([str(tmp_path / "dot.png"), "--cells", "1", "--agents", "5", "--preview"]) == 0
     err = capsys.readouterr().err.splitlines()
     assert err == ["swarmshape: warning: " + f"{tmp_path / 'dot.png'}: the whole picture became "
-                   "1 cell; raise --cells"]  # fmt: skip
+                   "1 cell; raise --cells to 2 to keep it"]  # fmt: skip
 
 
 def test_progress_off_a_terminal_is_a_line_every_few_seconds(monkeypatch, capsys):
