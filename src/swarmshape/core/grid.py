@@ -38,13 +38,14 @@ def bounding_box(image: np.ndarray) -> np.ndarray:
 def resample(fraction: np.ndarray, long_side: int) -> np.ndarray:
     """Resize a 0..1 ink image so its long side is `long_side` cells; ink where >= half.
 
-    Shrinking, each output cell averages the pixels whose centres fall in its box (`shrunk`).
+    Shrinking, each output cell averages the pixels whose centres fall in its box (`resized`).
     Growing, each cell takes the pixel under its centre, so a small icon becomes the same
     picture in bigger blocks.
     """
+    size = sized(fraction.shape, long_side)
     if long_side >= max(fraction.shape):
-        return stretched(fraction, sized(fraction.shape, long_side)) >= 0.5
-    return shrunk(fraction, long_side) >= 0.5
+        return stretched(fraction, size) >= 0.5
+    return resized(fraction, size) >= 0.5
 
 
 def sized(shape: tuple[int, ...], long_side: int) -> tuple[int, int]:
@@ -54,19 +55,16 @@ def sized(shape: tuple[int, ...], long_side: int) -> tuple[int, int]:
     return max(1, round(height * factor)), max(1, round(width * factor))
 
 
-def shrunk(fraction: np.ndarray, long_side: int) -> np.ndarray:
-    """A 0..1 image area-averaged down to `long_side` across (float32): each output pixel
-    averages the pixels whose centres fall in its box, first along rows and then along
-    columns, in float32 between the passes: the filter Pillow calls BOX, so shapes shrink the
-    same way images are loaded."""
-    height, width = fraction.shape
-    rows, cols = sized(fraction.shape, long_side)
+def resized(fraction: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """A 0..1 image resized to `shape` (float32): area-averaged along each axis it shrinks
+    (each output pixel the mean of the pixels whose centres fall in its box, columns first,
+    in float32 between the passes: the filter Pillow calls BOX, so shapes shrink the same way
+    images are loaded), each pixel repeated along an axis it grows."""
     result = fraction.astype(np.float32)
-    if cols != width:
-        result = _box_average(result, cols, axis=1)
-    if rows != height:
-        result = _box_average(result, rows, axis=0)
-    return result
+    for axis in (1, 0):
+        if shape[axis] < result.shape[axis]:
+            result = _box_average(result, shape[axis], axis=axis)
+    return result if result.shape == shape else stretched(result, shape)
 
 
 def stretched(image: np.ndarray, shape: tuple[int, int]) -> np.ndarray:

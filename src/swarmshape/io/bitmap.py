@@ -21,7 +21,7 @@ from swarmshape.core.grid import (
     crop,
     likeness,
     resample,
-    shrunk,
+    resized,
     sized,
 )
 from swarmshape.core.world import MAX_AGENTS, MAX_ARENA_CELLS, ROOM_PER_AGENT
@@ -142,7 +142,8 @@ class _Sizes:
         # tries between two doublings share one reference, made from the picture itself
         across = min(self.long_side, DETAIL * 2 ** (cells - 1).bit_length())
         if across not in self.references:
-            self.references[across] = shrunk(self.picture.ink, across)
+            ink = self.picture.ink
+            self.references[across] = resized(ink, sized(ink.shape, across))
         return likeness(self.references[across], grid)
 
     def largest(self) -> int:
