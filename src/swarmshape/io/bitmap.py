@@ -124,8 +124,10 @@ class _Sizes:
         self.references: dict[int, np.ndarray] = {}
 
     def grid(self, cells: int) -> np.ndarray:
-        """The grid `cells` across, before cropping (refused if larger than any arena)."""
+        """The grid `cells` across, before cropping (refused if larger than any arena); the
+        editor's drawings keep one cell per pixel, whatever is asked."""
         ink = self.picture.ink
+        cells = self.long_side if self.picture.one_cell_per_pixel else cells
         rows, cols = sized(ink.shape, cells)
         if rows * cols > MAX_ARENA_CELLS:  # before the grid is made: it would not fit in memory
             raise BitmapError(
@@ -190,8 +192,6 @@ def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
     if cells is not None and cells < 1:
         raise BitmapError(f"--cells must be at least 1, got {cells}")
     sizes = _Sizes(picture)
-    if picture.one_cell_per_pixel:  # the editor's drawing: cell for pixel, whatever is asked
-        cells = sizes.long_side
     if cells is None:
         cells, found = sizes.chosen()
         grid = sizes.grid(cells)
