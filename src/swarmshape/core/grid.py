@@ -107,9 +107,10 @@ def _box_average(image: np.ndarray, out: int, axis: int) -> np.ndarray:
 class Likeness:
     """How much of its picture a grid keeps. The grid is scaled back up to a reference of the
     picture (its ink area-averaged to a few pixels a cell): `iou` is the ink they share over
-    the ink of either, the picture's as fractions; a part (a piece of ink, 8-connected, or a
-    hole, 4-connected, of at least `PART` cells) is kept when exactly one of the grid's
-    overlaps it and that one overlaps no other part."""
+    the ink of either, the picture's as fractions. The picture's parts are its pieces of ink
+    (8-connected) and its holes (4-connected) of `PART` cells or more, and no smaller than a
+    cell of the coarsest grid asked about; each must be kept: overlapped by the grid, mostly
+    by one piece, and by a piece of its own (see `_unkept`)."""
 
     iou: float
     parts: int
@@ -136,17 +137,21 @@ class Likeness:
         return ", ".join(lost[:-1]) + " and " * (len(lost) > 1) + lost[-1] if lost else ""
 
 
-def likeness(reference: np.ndarray, grid: np.ndarray) -> Likeness:
-    """How much of a picture, given as a `reference` of ink fractions, `grid` keeps."""
+def likeness(reference: np.ndarray, grid: np.ndarray, coarsest: int) -> Likeness:
+    """How much of a picture, given as a `reference` of ink fractions, `grid` keeps. A part
+    counts when it has `PART` of the grid's cells and at least one cell of a grid `coarsest`
+    across: finer detail (the grain of a photo, which grows without end as the grid does) is
+    not asked for."""
     scaled = stretched(grid, reference.shape)
     shared = float(np.sum(reference, where=scaled, dtype=np.float64))
     either = float(np.sum(reference, where=~scaled, dtype=np.float64)) + float(scaled.sum())
     cell = reference.shape[0] / grid.shape[0] * reference.shape[1] / grid.shape[1]
+    least = max(PART * cell, (max(reference.shape) / coarsest) ** 2)
     ink = reference >= 0.5
     eight = np.ones((3, 3), dtype=bool)
-    parts, lost_parts = _unkept(_parts(ink, eight), _parts(grid, eight, scaled.shape), PART * cell)
+    parts, lost_parts = _unkept(_parts(ink, eight), _parts(grid, eight, scaled.shape), least)
     holes, lost_holes = _unkept(
-        _parts(~ink, None, hole=True), _parts(~grid, None, scaled.shape, hole=True), PART * cell
+        _parts(~ink, None, hole=True), _parts(~grid, None, scaled.shape, hole=True), least
     )
     return Likeness(shared / either if either else 1.0, parts, holes, lost_parts, lost_holes)
 
@@ -167,16 +172,22 @@ def _parts(
 
 
 def _unkept(picture: np.ndarray, grid: np.ndarray, least: float) -> tuple[int, int]:
-    """Of the picture's parts of at least `least` pixels: how many, and how many are lost,
-    broken (overlapped by more than one of the grid's) or merged (one of the grid's overlaps
-    more than one)."""
+    """Of the picture's parts of at least `least` pixels: how many, and how many are lost
+    (no piece of the grid overlaps it), broken (no one piece of the grid holds more than `KEPT`
+    of what the grid keeps of it: a crumb cut off a large part is not a loss, a stroke cut in
+    two is) or merged into another (a piece of the grid overlaps both by `least` or more)."""
     area = np.bincount(picture.ravel())
     counted = area >= least
     counted[0] = False
     both = counted[picture] & (grid > 0)
     span = int(grid.max()) + 1
-    pairs = np.unique(picture[both].astype(np.int64) * span + grid[both])  # one per overlap
-    partners = np.bincount(pairs // span, minlength=len(area))[counted]
-    merged = np.bincount(pairs % span) - 1
-    merged = merged[merged > 0]
-    return int(counted.sum()), int((partners != 1).sum() + merged.sum())
+    pairs, overlap = np.unique(
+        picture[both].astype(np.int64) * span + grid[both], return_counts=True
+    )
+    part = pairs // span
+    kept = np.bincount(part, overlap, minlength=len(area))[counted]
+    largest = np.zeros(len(area))
+    np.maximum.at(largest, part, overlap)
+    broken = largest[counted] <= KEPT * kept
+    merged = np.bincount(pairs[overlap >= least] % span) - 1
+    return int(counted.sum()), int((kept == 0).sum() + broken.sum() + merged[merged > 0].sum())

@@ -146,7 +146,7 @@ class _Sizes:
         if across not in self.references:
             ink = self.picture.ink
             self.references[across] = resized(ink, sized(ink.shape, across))
-        return likeness(self.references[across], grid)
+        return likeness(self.references[across], grid, DEFAULT_CELLS)
 
     def largest(self) -> int:
         """The most cells across whose grid, with the robots for its ink and their room, fits
