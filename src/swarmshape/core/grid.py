@@ -181,9 +181,13 @@ def _unkept(picture: np.ndarray, grid: np.ndarray, least: float) -> tuple[int, i
     counted[0] = False
     both = counted[picture] & (grid > 0)
     span = int(grid.max()) + 1
-    pairs, overlap = np.unique(
-        picture[both].astype(np.int64) * span + grid[both], return_counts=True
-    )
+    keys = picture[both].astype(np.int64) * span + grid[both]  # one per overlapping pixel
+    if len(area) * span <= len(keys):  # counted in one pass when the table is no larger
+        overlap = np.bincount(keys, minlength=len(area) * span)
+        pairs = np.flatnonzero(overlap)
+        overlap = overlap[pairs]
+    else:
+        pairs, overlap = np.unique(keys, return_counts=True)
     part = pairs // span
     kept = np.bincount(part, overlap, minlength=len(area))[counted]
     largest = np.zeros(len(area))

@@ -162,7 +162,8 @@ class _Sizes:
     def chosen(self) -> tuple[int, Likeness | None]:
         """The fewest cells across, from `DEFAULT_CELLS` up, whose grid keeps the picture, and
         its likeness (None for a picture kept one cell per pixel); the largest size when none
-        does. Sizes double until one keeps it, then a bisection finds the first."""
+        does. Sizes double until one keeps it, then a bisection finds the first to within one
+        cell in `DEFAULT_CELLS` (3 %: finer than the coarsest grid tells apart)."""
         if self.picture.one_cell_per_pixel or self.long_side <= DEFAULT_CELLS:
             return self.long_side, None
         largest = self.largest()
@@ -172,7 +173,7 @@ class _Sizes:
         while not found.kept and cells < largest:
             low, cells = cells, min(2 * cells, largest)
             found = self.likeness(cells)
-        while found.kept and cells - low > 1:
+        while found.kept and cells - low > max(1, cells // DEFAULT_CELLS):
             middle = (low + cells) // 2
             tried = self.likeness(middle)
             low, cells, found = (low, middle, tried) if tried.kept else (middle, cells, found)
