@@ -154,10 +154,13 @@ class _Sizes:
         ink = self.picture.ink
         share = float(ink.mean())
         box = min(MAX_ARENA_CELLS / max(1.0, share * (1 + ROOM_PER_AGENT)), MAX_AGENTS / share)
-        cells = min(self.long_side, int((box * self.long_side / min(ink.shape)) ** 0.5))
-        while cells > 1 and np.prod(sized(ink.shape, cells)) > box:
-            cells -= 1
-        return cells
+        low, high = 1, self.long_side
+        while low < high:  # the grid's cells grow with its long side
+            middle = (low + high + 1) // 2
+            low, high = (
+                (middle, high) if np.prod(sized(ink.shape, middle)) <= box else (low, middle - 1)
+            )
+        return low
 
     def chosen(self) -> tuple[int, Likeness | None]:
         """The fewest cells across, from `DEFAULT_CELLS` up, whose grid keeps the picture, and
