@@ -294,11 +294,11 @@ SHADES = ".:-=+*%#"
 
 def preview(config: RunConfig) -> str:
     """The shapes `config` forms, as text; an image's shape beside its picture at its size."""
-    world = load_world(config)
     path = config.shape_path
     if path.suffix.lower() == ".toml":
-        return preview_text(world)
-    return preview_text(world, read_picture(path, threshold=config.threshold, invert=config.invert))
+        return preview_text(load_world(config))
+    picture = read_picture(path, threshold=config.threshold, invert=config.invert)
+    return preview_text(load_world(config, picture), picture)
 
 
 def preview_text(world: World, picture: Picture | None = None) -> str:
