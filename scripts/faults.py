@@ -66,10 +66,11 @@ HEAL_LIMIT = {"optimal": 20_000, "greedy": 20_000, "random": 40_000, "paper": 40
 """Steps after the loss within which a run must be whole again (those of `LIMIT`: formation
 takes far fewer on these shapes; a run still short by then is stuck, not slow)."""
 HEAL_CELLS = {"paper": 16}
-"""Cells across a shipped shape, per strategy (others: the image's own size, up to 32). The
-paper's one mover at a time forms the 300 to 700-cell shipped shapes in 100,000 steps and
-more: twenty seeds of eleven shapes would take a day on this machine, so it forms them at 16
-cells across (60 to 180 cells); `--paper-cells` changes it."""
+"""Cells across a shipped shape, per strategy (others: the default size, which for every
+shipped shape is its own size or 32 across). The paper's one mover at a time forms the 300 to
+700-cell shipped shapes in 100,000 steps and more: twenty seeds of eleven shapes would take a
+day on this machine, so it forms them at 16 cells across (60 to 180 cells); `--paper-cells`
+changes it."""
 
 
 def heal_case(case: tuple[str, str, int]) -> dict:

@@ -12,8 +12,11 @@ from PIL import Image
 
 from swarmshape.cli import main
 from swarmshape.errors import InputError
+from swarmshape.io.bitmap import load_grid
 from swarmshape.io.scenario import read_start_cells
+from swarmshape.session import SHADES
 from swarmshape.ui.render import SEED_GREEN
+from tests import pictures
 from tests.conftest import SHAPES, grid_from, world_of
 
 HORSESHOE = str(SHAPES / "horseshoe.png")
@@ -118,8 +121,8 @@ def test_a_resumed_state_may_be_saved_over_itself(tmp_path):
 def test_preview_prints_the_shape_and_runs_nothing(tmp_path, capsys):
     assert main([HORSESHOE, "--preview", "--metrics", str(tmp_path / "m.json")]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == "horseshoe: 90 cells, 12x12, 90 robots, scale 1.00"
-    assert lines[1] == "#" * 12 and len(lines) == 13
+    assert lines[0].startswith("horseshoe: 90 cells, 12x12, 90 robots, scale 1.00; left, its ")
+    assert lines[1] == "#" * 12 + "  " + "#" * 12 and len(lines) == 13, "the picture beside"
     assert not (tmp_path / "m.json").exists()
 
 
@@ -157,7 +160,7 @@ def test_a_run_with_two_warnings_shows_the_first_in_one_line(tmp_path, capsys):
     assert main([str(tmp_path / "dot.png"), "--cells", "1", "--agents", "5", "--preview"]) == 0
     err = capsys.readouterr().err.splitlines()
     assert err == ["swarmshape: warning: " + f"{tmp_path / 'dot.png'}: the whole picture became "
-                   "1 cell; raise --cells"]  # fmt: skip
+                   "1 cell; raise --cells to 2 to keep it"]  # fmt: skip
 
 
 def test_progress_off_a_terminal_is_a_line_every_few_seconds(monkeypatch, capsys):
@@ -244,3 +247,20 @@ def test_the_editor_names_no_seed_while_nothing_runs(tmp_path, monkeypatch, caps
     assert "seed" not in capsys.readouterr().out
     assert main([str(SHAPES / "line.png"), "--seed", "5"]) == 0
     assert capsys.readouterr().out.startswith("seed 5\n"), "a window run names its seed"
+
+
+def test_preview_shows_a_users_picture_beside_the_shape_it_keeps(tmp_path, capsys):
+    """Issue 34: a word at the default size, its letters beside the cells that draw them."""
+    path = pictures.word(tmp_path / "word.png")
+    assert main([str(path), "--preview"]) == 0
+    out, err = capsys.readouterr()
+    head, *rows = out.splitlines()
+    grid = load_grid(path)
+    assert head.startswith(f"word: {grid.sum()} cells, {grid.shape[1]}x{grid.shape[0]}")
+    assert err == "" and len(rows) == grid.shape[0]
+    shape = ["".join("#" if cell else "." for cell in row) for row in grid.tolist()]
+    for row, cells in zip(rows, shape, strict=True):
+        picture, shown = row[: -len(cells) - 2], row[-len(cells) :]
+        assert shown == cells and len(picture) == len(cells) and set(picture) <= set(SHADES)
+    assert main([str(path), "--preview", "--cells", "32"]) == 0
+    assert "raise --cells to" in capsys.readouterr().err

@@ -31,8 +31,8 @@ from swarmshape.config import (
 from swarmshape.core.faults import FaultEvent, parse_event, parse_region
 from swarmshape.core.options import FLAG, PLUGIN_KINDS, Spec, plain, specs
 from swarmshape.errors import InputError, SettingError, SettingWarning
-from swarmshape.runs import load_world, resume
-from swarmshape.session import Outputs, Session, preview_text
+from swarmshape.runs import resume
+from swarmshape.session import Outputs, Session, preview, preview_text
 
 COMMANDS = ("run", "edit", "sweep", "plot", "strategies", "check", "benchmark")
 NOT_FORMED = 3
@@ -192,7 +192,9 @@ def _shared_options() -> argparse.ArgumentParser:
     )
     image = groups["image loading"]
     image.add_argument(
-        "--preview", action="store_true", help="print the shape as text and stop (no run)"
+        "--preview",
+        action="store_true",
+        help="print the shape as text beside its picture and stop (no run)",
     )
     sim = groups["simulation"]
     sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
@@ -422,10 +424,9 @@ def run_session(args: argparse.Namespace) -> int:
         config = configure(args.path, **given)
     if args.preview:
         if args.load_state is not None:  # the saved run's shape, not the default one
-            world = resume(args.load_state, args.strategy)[1].world
+            print(preview_text(resume(args.load_state, args.strategy)[1].world))
         else:
-            world = load_world(config)
-        print(preview_text(world))
+            print(preview(config))
         return 0
     outputs = Outputs(
         metrics=getattr(args, "metrics", None),

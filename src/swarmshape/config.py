@@ -157,7 +157,8 @@ class RunConfig:
     cells: int | None = option(
         None,
         "cells across the shape's long side: larger images are area-averaged down, smaller "
-        "ones grown; default the image's own size, at most 32",
+        "ones grown; default the fewest from 32 up that keep the picture's pieces and holes "
+        "with an IoU of at least 0.5 (a picture of at most 32 pixels: its own size)",
         kind=INTEGER,
         at_least=1,
         group="image loading",

@@ -28,7 +28,7 @@ from swarmshape.core.snapshot import Snapshot, SnapshotError, prefixed
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import World, build_world, packed_start
 from swarmshape.errors import InputError
-from swarmshape.io.bitmap import ShapeWarning
+from swarmshape.io.bitmap import Picture, ShapeWarning
 from swarmshape.io.checkpoint import load_state, save_state
 from swarmshape.io.scenario import ImageOptions, load_scenario, read_start_cells
 
@@ -41,11 +41,13 @@ def registered_strategy(name: str) -> None:
     strategies.get(name)
 
 
-def load_world(config: RunConfig) -> World:
-    """The scenario's groups, fitted to their robots and placed in the arena."""
+def load_world(config: RunConfig, picture: Picture | None = None) -> World:
+    """The scenario's groups, fitted to their robots and placed in the arena (`picture`: the
+    image of an image's scenario, when it has been read already)."""
     path = config.shape_path
     image = ImageOptions(config.cells, config.threshold, config.invert)
-    scenario = load_scenario(path, image, config.agents if config.fit == "agents" else None)
+    fit = config.agents if config.fit == "agents" else None
+    scenario = load_scenario(path, image, fit, picture)
     specs = list(scenario.groups)
     if config.agents is not None:
         if len(specs) > 1:

@@ -20,8 +20,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from swarmshape import strategies
 from swarmshape.config import RunConfig
+from swarmshape.core.grid import resized
 from swarmshape.core.guard import PluginCode
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Pose
@@ -32,6 +35,7 @@ from swarmshape.errors import InputError, Terminated
 from swarmshape.experiments.positions import Positions
 from swarmshape.experiments.progress import RunProgress
 from swarmshape.experiments.trace import Trace
+from swarmshape.io.bitmap import Picture, read_picture
 from swarmshape.io.files import check_output, distinct_outputs, identity, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour
 from swarmshape.runs import Observer, Runner, load_world, resume, save, start_cells, start_swarm
@@ -283,8 +287,23 @@ def say(line: str) -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
-def preview_text(world: World) -> str:
-    """Each group's shape as rows of # (a cell) and . (none), with its size."""
+SHADES = ".:-=+*%#"
+"""A picture's ink per cell in a preview, from none to all: the first four under half a cell
+(which is no cell of the shape), the others half or more."""
+
+
+def preview(config: RunConfig) -> str:
+    """The shapes `config` forms, as text; an image's shape beside its picture at its size."""
+    path = config.shape_path
+    if path.suffix.lower() == ".toml":
+        return preview_text(load_world(config))
+    picture = read_picture(path, threshold=config.threshold, invert=config.invert)
+    return preview_text(load_world(config, picture), picture)
+
+
+def preview_text(world: World, picture: Picture | None = None) -> str:
+    """Each group's shape as rows of # (a cell) and . (none), with its size; with a `picture`
+    (a world of one image), the picture to its left at the same size, in `SHADES`."""
     parts = []
     for group in world.groups:
         grid = group.shape.grid
@@ -293,8 +312,30 @@ def preview_text(world: World) -> str:
             f"{group.agents:,} robots, scale {group.shape.scale:.2f}"
         )
         rows = ["".join("#" if cell else "." for cell in row) for row in grid.tolist()]
+        if picture is not None:
+            head += (
+                f"; left, its picture by ink per cell ({SHADES[1:4]} under half, {SHADES[4:]} more)"
+            )
+            rows = _beside(_shaded(picture.ink, grid.shape), rows)
         parts.append("\n".join([head, *rows]))
     return "\n\n".join(parts)
+
+
+def _shaded(ink: np.ndarray, shape: tuple[int, int]) -> list[str]:
+    """Rows of `SHADES` for `ink` resized to `shape`."""
+    share = resized(ink, shape)
+    steps = len(SHADES) - 2  # SHADES[1] to SHADES[-2] for the shares between none and all
+    index = np.where(share > 0, 1 + np.minimum(share * steps, steps).astype(int), 0)
+    return ["".join(SHADES[i] for i in row) for row in index.tolist()]
+
+
+def _beside(left: list[str], right: list[str]) -> list[str]:
+    """Two blocks of text side by side, the shorter padded with blank rows."""
+    width = max(len(row) for row in left)
+    height = max(len(left), len(right))
+    left += [""] * (height - len(left))
+    right += [""] * (height - len(right))
+    return [f"{a:<{width}}  {b}".rstrip() for a, b in zip(left, right, strict=True)]
 
 
 def opening_line(swarm: Swarm, config: RunConfig) -> str:

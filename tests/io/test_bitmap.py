@@ -4,19 +4,25 @@ import resource
 import subprocess
 import sys
 import tracemalloc
+import warnings
 
 import numpy as np
 import pytest
 from PIL import Image
+from scipy import ndimage
 
+from swarmshape.core.grid import KEPT, PART, crop, resample
 from swarmshape.io.bitmap import (
+    DEFAULT_CELLS,
     BitmapError,
     ShapeWarning,
+    chosen_cells,
     grid_for,
     load_grid,
     read_picture,
     save_grid,
 )
+from tests import pictures
 
 
 def write(path, array, mode=None):
@@ -227,11 +233,92 @@ def test_shrinking_averages_each_box_as_pillows_box_filter(size, out):
     assert np.allclose(_box_average(pixels, out, axis=1), pillow, atol=1e-6)
 
 
-def test_a_shape_that_vanishes_at_the_default_size_names_the_size(tmp_path):
-    """Issue 29, case 13: without --cells this said "the shape vanishes at --cells None"."""
-    from swarmshape.io.bitmap import DEFAULT_CELLS
-
+def test_a_shape_that_vanishes_names_its_size_and_the_size_that_keeps_it(tmp_path):
+    """Issue 29, case 13: without --cells this said "the shape vanishes at --cells None". Since
+    issue 34 the default size keeps the picture, so only a size asked for can lose it all."""
     image = np.full((400, 400), 255)
     image[0, 0] = image[-1, -1] = 0  # two dots far apart: each a sliver of its cell
-    with pytest.raises(BitmapError, match=f"vanishes at {DEFAULT_CELLS} cells across"):
-        load_grid(write(tmp_path / "dots.png", image))
+    path = write(tmp_path / "dots.png", image)
+    keeps = chosen_cells(read_picture(path))
+    with pytest.raises(
+        BitmapError, match=f"vanishes at 32 cells across; raise --cells to {keeps} "
+    ):
+        load_grid(path, cells=32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert load_grid(path).sum() == load_grid(path, cells=keeps).sum() == 2
+
+
+def pieces_and_holes(ink: np.ndarray, least: float = 0) -> tuple[int, int]:
+    """8-connected pieces of ink and 4-connected holes (background off the border), counting
+    those of at least `least` pixels."""
+    labels, _ = ndimage.label(ink, np.ones((3, 3)))
+    pieces = int((np.bincount(labels.ravel())[1:] >= max(least, 1)).sum())
+    background, _ = ndimage.label(~ink)
+    border = np.concatenate([background[0], background[-1], background[:, 0], background[:, -1]])
+    area = np.bincount(background.ravel())
+    area[np.unique(border)] = 0
+    return pieces, int((area[1:] >= max(least, 1)).sum())
+
+
+def iou_at_full_size(ink: np.ndarray, grid: np.ndarray) -> float:
+    """The IoU of a picture's ink and `grid` scaled up to it, each pixel taking its cell."""
+    rows = np.arange(ink.shape[0]) * grid.shape[0] // ink.shape[0]
+    cols = np.arange(ink.shape[1]) * grid.shape[1] // ink.shape[1]
+    scaled = grid[np.ix_(rows, cols)]
+    return (scaled & ink).sum() / (scaled | ink).sum()
+
+
+USERS = [("word", None, True), ("lines", pictures.LINES, True), ("ring", pictures.RING, False),
+         ("photo", pictures.PHOTO, False)]  # fmt: skip
+"""Each picture, its pieces and holes when known, and whether 32 cells lose it."""
+
+
+@pytest.mark.parametrize(("name", "known", "lost_at_32"), USERS)
+def test_the_default_size_keeps_a_users_picture(tmp_path, name, known, lost_at_32):
+    """Issue 34: at the old default (the long side, at most 32 cells) a word became 32 x 6
+    cells and a line drawing scattered cells. Now the word's letters and holes, the drawing's
+    strokes and the ring's hole are kept, and the shape shares more with the picture than it
+    differs from it; a picture 32 cells keep is not made larger."""
+    picture = read_picture(getattr(pictures, name)(tmp_path / f"{name}.png"))
+    cells = chosen_cells(picture)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        grid = load_grid(picture.path)
+    whole = resample(picture.ink, cells)
+    assert np.array_equal(grid, crop(whole)) and max(whole.shape) == cells
+    cell = (max(picture.ink.shape) / cells) ** 2
+    counted, every = pieces_and_holes(picture.ink, PART * cell), pieces_and_holes(picture.ink)
+    kept = pieces_and_holes(grid)
+    for least, shown, most in zip(counted, kept, every, strict=True):
+        assert least <= shown <= most, "none lost of 2x2 cells or more, none made up"
+    assert kept == (known or kept)
+    assert iou_at_full_size(picture.ink, whole) >= KEPT
+    assert (cells > DEFAULT_CELLS) == lost_at_32
+    assert (pieces_and_holes(resample(picture.ink, DEFAULT_CELLS)) != kept) == lost_at_32
+
+
+@pytest.mark.parametrize("name", ["word", "lines"])
+def test_too_few_cells_warn_with_the_size_that_keeps_the_picture(tmp_path, name):
+    path = getattr(pictures, name)(tmp_path / f"{name}.png")
+    keeps = chosen_cells(read_picture(path))
+    with pytest.warns(ShapeWarning, match=f"at {keeps // 2} cells across the shape loses .*; "
+                                          f"raise --cells to {keeps} to keep it$"):  # fmt: skip
+        load_grid(path, cells=keeps // 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_grid(path, cells=keeps)
+
+
+def test_every_shipped_picture_loads_at_a_size_that_keeps_it(shapes):
+    """Pictures of at most 32 pixels keep one cell per pixel; larger ones keep their look."""
+    for path in sorted(shapes.glob("*.png")):
+        picture = read_picture(path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            grid = load_grid(path)
+        long_side = max(picture.ink.shape)
+        if long_side <= DEFAULT_CELLS:
+            assert grid.shape == picture.ink.shape, path.name
+        else:
+            assert chosen_cells(picture) >= DEFAULT_CELLS, path.name

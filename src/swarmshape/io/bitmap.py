@@ -15,13 +15,26 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, PngImagePlugin, UnidentifiedImageError
 
-from swarmshape.core.grid import bounding_box, crop, resample
-from swarmshape.core.world import MAX_ARENA_CELLS
+from swarmshape.core.grid import (
+    Likeness,
+    bounding_box,
+    crop,
+    likeness,
+    resample,
+    resized,
+    sized,
+)
+from swarmshape.core.world import MAX_AGENTS, MAX_ARENA_CELLS, ROOM_PER_AGENT
 from swarmshape.errors import InputError
 from swarmshape.io.files import atomic_write, readable_file
 
 DEFAULT_CELLS = 32
-"""Long side of the grid, in cells, when none is asked for and the image is larger."""
+"""Fewest cells across a picture larger than this is given when none is asked for (smaller
+pictures keep one cell per pixel); more when its parts need them (`chosen_cells`)."""
+
+DETAIL = 4
+"""Pixels across a cell in the reference a grid is compared with: a stroke narrower than half
+a cell can never be ink, and the reference resolves half of that."""
 
 DEFAULT_THRESHOLD = 0.5
 
@@ -40,9 +53,6 @@ DARK_BORDER = 0.9
 
 MAX_FIT = 4096
 """Longest side ``--fit agents`` tries (a million robots need about 1,130 across)."""
-
-LOST = 0.5
-"""A shape keeping less than this share of the picture's ink earns a warning."""
 
 DECODING_ERRORS = (OSError, SyntaxError, ValueError, EOFError, IndexError, TypeError, struct.error,
                    ZeroDivisionError, RuntimeError)  # fmt: skip
@@ -77,7 +87,7 @@ def load_grid(
     invert: bool = False,
 ) -> np.ndarray:
     """Read an image and return its ink as a cropped boolean grid, `cells` across its long
-    side (None: the image's own size, at most `DEFAULT_CELLS`).
+    side (None: the fewest that keep the picture, `chosen_cells`).
 
     Transparent pixels are never ink. Among opaque pixels, ink is the darker side of
     ``threshold`` (luminance 0..1) on a light background; a border at least 90 % dark with
@@ -104,50 +114,117 @@ def read_picture(
     return Picture(path, bounding_box(ink), one_cell_per_pixel, near)
 
 
+class _Sizes:
+    """A picture's grids and their likeness at the sizes tried (`chosen`), each reference of
+    the picture made once."""
+
+    def __init__(self, picture: Picture) -> None:
+        self.picture = picture
+        self.long_side = max(picture.ink.shape)
+        self.references: dict[int, np.ndarray] = {}
+
+    def grid(self, cells: int) -> np.ndarray:
+        """The grid `cells` across, before cropping (refused if larger than any arena); the
+        editor's drawings keep one cell per pixel, whatever is asked."""
+        ink = self.picture.ink
+        cells = self.long_side if self.picture.one_cell_per_pixel else cells
+        rows, cols = sized(ink.shape, cells)
+        if rows * cols > MAX_ARENA_CELLS:  # before the grid is made: it would not fit in memory
+            raise BitmapError(
+                f"{self.picture.path}: --cells {cells:,} makes a grid of {max(rows, cols):,}x"
+                f"{min(rows, cols):,} cells, more than the {MAX_ARENA_CELLS:,} of the largest "
+                "arena; lower --cells"
+            )
+        return resample(ink, cells)
+
+    def likeness(self, cells: int, grid: np.ndarray | None = None) -> Likeness:
+        """How much of the picture its grid `cells` across keeps."""
+        grid = self.grid(cells) if grid is None else grid
+        # at least DETAIL pixels a cell, on a ladder of powers of two: the sizes a bisection
+        # tries between two doublings share one reference, made from the picture itself
+        across = min(self.long_side, DETAIL * 2 ** (cells - 1).bit_length())
+        if across not in self.references:
+            ink = self.picture.ink
+            self.references[across] = resized(ink, sized(ink.shape, across))
+        return likeness(self.references[across], grid, DEFAULT_CELLS)
+
+    def largest(self) -> int:
+        """The most cells across whose grid, with the robots for its ink and their room, fits
+        the largest arena (and the picture's own size: a larger grid adds nothing)."""
+        ink = self.picture.ink
+        share = float(ink.mean())
+        box = min(MAX_ARENA_CELLS / max(1.0, share * (1 + ROOM_PER_AGENT)), MAX_AGENTS / share)
+        low, high = 1, self.long_side
+        while low < high:  # the grid's cells grow with its long side
+            middle = (low + high + 1) // 2
+            low, high = (
+                (middle, high) if np.prod(sized(ink.shape, middle)) <= box else (low, middle - 1)
+            )
+        return low
+
+    def chosen(self) -> tuple[int, Likeness | None]:
+        """The fewest cells across, from `DEFAULT_CELLS` up, whose grid keeps the picture, and
+        its likeness (None for a picture kept one cell per pixel); the largest size when none
+        does. Sizes double until one keeps it, then a bisection finds the first to within one
+        cell in `DEFAULT_CELLS` (3 %: finer than the coarsest grid tells apart)."""
+        if self.picture.one_cell_per_pixel or self.long_side <= DEFAULT_CELLS:
+            return self.long_side, None
+        largest = self.largest()
+        cells = min(DEFAULT_CELLS, largest)
+        low = cells - 1  # below the fewest: no bisection unless a larger size is needed
+        found = self.likeness(cells)
+        while not found.kept and cells < largest:
+            low, cells = cells, min(2 * cells, largest)
+            found = self.likeness(cells)
+        while found.kept and cells - low > max(1, cells // DEFAULT_CELLS):
+            middle = (low + cells) // 2
+            tried = self.likeness(middle)
+            low, cells, found = (low, middle, tried) if tried.kept else (middle, cells, found)
+        return cells, found
+
+
+def chosen_cells(picture: Picture) -> int:
+    """The cells across that `grid_of` gives `picture` when none are asked for: the fewest, from
+    `DEFAULT_CELLS` up to the largest arena, whose grid keeps its parts and outline
+    (`Likeness`); pictures no larger, and the editor's drawings, keep one cell per pixel."""
+    return _Sizes(picture).chosen()[0]
+
+
 def grid_of(picture: Picture, cells: int | None) -> np.ndarray:
-    """The picture as a grid `cells` across (see `load_grid`); a warning when most of its
-    ink is lost on the way, naming the option that helps."""
+    """The picture as a grid `cells` across (None: `chosen_cells`); a warning when the grid
+    loses much of the picture, naming the size that keeps it."""
     if cells is not None and cells < 1:
         raise BitmapError(f"--cells must be at least 1, got {cells}")
-    long_side = max(picture.ink.shape)
-    if picture.one_cell_per_pixel or (cells is None and long_side <= DEFAULT_CELLS):
-        cells = long_side
-    across = cells or DEFAULT_CELLS
-    short = max(1, round(min(picture.ink.shape) * across / long_side))
-    if across * short > MAX_ARENA_CELLS:  # before the grid is made: it would not fit in memory
-        raise BitmapError(
-            f"{picture.path}: --cells {across:,} makes a grid of {across:,}x{short:,} cells, "
-            f"more than the {MAX_ARENA_CELLS:,} of the largest arena; lower --cells"
-        )
-    sized = resample(picture.ink, across)
-    if not sized.any():
-        raise BitmapError(
-            f"{picture.path}: the shape vanishes at {across} cells across; {_help(picture)}"
-        )
-    kept, expected = int(sized.sum()), picture.ink.mean() * sized.size
-    if kept <= 2 < picture.ink.sum():
-        lost = f"the whole picture became {kept} cell{'' if kept == 1 else 's'}"
-    elif kept < LOST * expected:
-        lost = f"the shape keeps {kept} cells where the picture suggests about {round(expected)}"
+    sizes = _Sizes(picture)
+    if cells is None:
+        cells, found = sizes.chosen()
+        grid = sizes.grid(cells)
     else:
-        return crop(sized)
-    warnings.warn(f"{picture.path}: {lost}; {_help(picture)}", ShapeWarning, stacklevel=2)
-    return crop(sized)
+        grid = sizes.grid(cells)
+        exact = picture.one_cell_per_pixel or cells >= sizes.long_side  # grown cell for pixel
+        found = None if exact or not grid.any() else sizes.likeness(cells, grid)
+    if not grid.any():
+        raise BitmapError(f"{picture.path}: the shape vanishes at {cells} cells across; "
+                          f"{_help(picture, sizes, cells)}")  # fmt: skip
+    kept = int(grid.sum())
+    if kept <= 2 < picture.ink.sum():  # however like the picture, no shape for a swarm
+        lost = f"the whole picture became {kept} cell{'' if kept == 1 else 's'}"
+    elif found is not None and not found.kept:
+        lost = f"at {cells} cells across the shape loses {found.losses()}"
+    else:
+        return crop(grid)
+    warnings.warn(
+        f"{picture.path}: {lost}; {_help(picture, sizes, cells)}", ShapeWarning, stacklevel=2
+    )
+    return crop(grid)
 
 
 def grid_for(picture: Picture, robots: int) -> np.ndarray:
     """The largest grid of the picture with at most `robots` cells (``--fit agents``)."""
-
-    def grid(cells: int) -> np.ndarray:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ShapeWarning)  # small on purpose
-            return grid_of(picture, cells)
+    sizes = _Sizes(picture)
 
     def count(cells: int) -> int:
-        try:
-            return int(grid(cells).sum())
-        except BitmapError:  # vanished: too small
-            return 0
+        return int(sizes.grid(cells).sum())
 
     low, high = 1, 2
     while count(high) <= robots and high < MAX_FIT:
@@ -157,14 +234,18 @@ def grid_for(picture: Picture, robots: int) -> np.ndarray:
         low, high = (middle, high) if count(middle) <= robots else (low, middle)
     if count(low) == 0:
         raise BitmapError(f"{picture.path}: too few robots ({robots}) to draw any of its shape")
-    return grid(low)
+    return crop(sizes.grid(low))
 
 
-def _help(picture: Picture) -> str:
-    """The option most likely to bring the shape back."""
+def _help(picture: Picture, sizes: _Sizes, cells: int) -> str:
+    """The option most likely to bring the shape back: the cells that keep the picture, or for
+    a low-contrast image (whose ink is noise near the threshold), the threshold."""
     if picture.near_threshold >= 0.5:
         return "this is a low-contrast image: move --threshold (0..1) toward its grey"
-    return "raise --cells"
+    keeps, found = sizes.chosen()
+    if found is not None and not found.kept:
+        return f"no size up to the largest arena's ({keeps} cells across) keeps it"
+    return f"raise --cells to {keeps} to keep it" if keeps > cells else f"--cells {keeps} keeps it"
 
 
 def _open_rgba(path: Path) -> tuple[np.ndarray, bool]:

@@ -34,7 +34,14 @@ from PIL import ImageColor
 from swarmshape.core.shape import Pose, Shape, ShapeError
 from swarmshape.core.world import GroupSpec, World
 from swarmshape.errors import InputError
-from swarmshape.io.bitmap import DEFAULT_THRESHOLD, grid_for, grid_of, load_grid, read_picture
+from swarmshape.io.bitmap import (
+    DEFAULT_THRESHOLD,
+    Picture,
+    grid_for,
+    grid_of,
+    load_grid,
+    read_picture,
+)
 from swarmshape.io.files import readable_file
 
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
@@ -66,14 +73,19 @@ class Scenario:
 
 
 def load_scenario(
-    path: str | Path, image: ImageOptions | None = None, fit: int | None = None
+    path: str | Path,
+    image: ImageOptions | None = None,
+    fit: int | None = None,
+    picture: Picture | None = None,
 ) -> Scenario:
     """Read an image (one group) or a ``.toml`` scenario. With `fit`, an image is sized to
-    have as many cells as possible up to that many (to fill that many robots)."""
+    have as many cells as possible up to that many (to fill that many robots). `picture` is
+    the image at `path` when it has been read already (a preview shows it too)."""
     path = Path(path)
     image = image or ImageOptions()
     if path.suffix.lower() != ".toml":
-        picture = read_picture(path, threshold=image.threshold, invert=image.invert)
+        if picture is None:
+            picture = read_picture(path, threshold=image.threshold, invert=image.invert)
         grid = grid_of(picture, image.cells) if fit is None else grid_for(picture, fit)
         return Scenario(path.name, (GroupSpec(path.stem, Shape(grid), parse_colour(PALETTE[0])),))
     if fit is not None:
