@@ -158,6 +158,19 @@ def test_concurrent_groups_form_side_by_side(strategy):
     assert (on_a_target >= 0).sum() == len(swarm.world.targets)
 
 
+def test_a_spare_robot_boxed_in_its_shape_hands_a_mover_its_way():
+    """`scripts/faults.py --heal` found it: two random shapes under `random`, every target
+    handed out, a spare robot still waiting boxed in by settled robots in the last mover's
+    way; the mover turned back and forth above it for 40,000 steps."""
+    specs = [
+        GroupSpec("g0", Shape(grid_from("..##. #..## ###.# ....#")), (1, 2, 3), 16),
+        GroupSpec("g1", Shape(grid_from("###.# ...## ##.## #.##.")), (3, 2, 1), 19),
+    ]
+    swarm = Swarm(build_world(specs), create("random"), 12)
+    run(swarm, max_steps=1000)
+    assert swarm.complete and swarm.overlap_total == 0
+
+
 @settings(max_examples=max(1, settings().max_examples // 4), deadline=None)
 @given(
     bits=st.lists(st.booleans(), min_size=30, max_size=30),

@@ -521,7 +521,13 @@ class Steering:
         idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
         trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
-        caught = idle & same_group & trapped
+        # a waiting robot may yet be sent to a target of the strategy's plan, unless none is
+        # left open: then it is spare, and only a hand-over moves it on
+        groups = np.unique(swarm.group[blocked]).tolist()
+        handed_out = np.zeros(len(swarm.world.groups), dtype=bool)
+        handed_out[groups] = [len(self.open_targets(g)) == 0 for g in groups]
+        spare = (state == WANDERING) | handed_out[swarm.group[robot]]
+        caught = idle & same_group & trapped & spare
         if caught.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
             return self._make_way(blocked[~caught], blocker[~caught])
@@ -577,7 +583,8 @@ class Steering:
         and the mover waits or wanders in its place, as it did. Among movers and settled robots
         the idle robot finds no free cell to step aside into: a block with 5 % stalled early,
         under `random`, jammed at 48 % behind such wanderers, and two random shapes under
-        `random` never formed behind a waiting one (`scripts/faults.py --heal`). The idle robot
+        `random` never formed behind a spare one still waiting, every target handed out
+        (`scripts/faults.py --heal`). The idle robot
         stands one cell further along the mover's way, so every hand-over shortens the trips
         left and they cannot go on for ever; the mover it replaces may be in the next mover's
         way in turn, and so on out. The idle robot goes on round whatever the mover was going
