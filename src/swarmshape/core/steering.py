@@ -521,13 +521,14 @@ class Steering:
         idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
         trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
-        # a waiting robot may yet be sent to a target of the strategy's plan, unless none is
-        # left open: then it is spare, and only a hand-over moves it on
-        groups = np.unique(swarm.group[blocked]).tolist()
-        handed_out = np.zeros(len(swarm.world.groups), dtype=bool)
-        handed_out[groups] = [len(self.open_targets(g)) == 0 for g in groups]
-        spare = (state == WANDERING) | handed_out[swarm.group[robot]]
-        caught = idle & same_group & trapped & spare
+        caught = idle & same_group & trapped
+        if caught.any():
+            # a waiting robot may yet be sent to a target of the strategy's plan, unless none
+            # is left open: then it is spare, and only a hand-over moves it on
+            groups = np.unique(swarm.group[robot[caught]]).tolist()
+            handed_out = np.zeros(len(swarm.world.groups), dtype=bool)
+            handed_out[groups] = [len(self.open_targets(g)) == 0 for g in groups]
+            caught &= (state == WANDERING) | handed_out[swarm.group[robot]]
         if caught.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
             return self._make_way(blocked[~caught], blocker[~caught])
@@ -584,11 +585,10 @@ class Steering:
         the idle robot finds no free cell to step aside into: a block with 5 % stalled early,
         under `random`, jammed at 48 % behind such wanderers, and two random shapes under
         `random` never formed behind a spare one still waiting, every target handed out
-        (`scripts/faults.py --heal`). The idle robot
-        stands one cell further along the mover's way, so every hand-over shortens the trips
-        left and they cannot go on for ever; the mover it replaces may be in the next mover's
-        way in turn, and so on out. The idle robot goes on round whatever the mover was going
-        round, as after a swap."""
+        (`scripts/faults.py --heal`). The idle robot stands one cell further along the mover's
+        way, so every hand-over shortens the trips left and they cannot go on for ever; the
+        mover it replaces may be in the next mover's way in turn, and so on out. The idle robot
+        goes on round whatever the mover was going round, as after a swap."""
         waited = self.swarm.state[idle] == WAITING
         self.assign(idle, self.target[movers])
         self.routed[idle] = self.routed[movers]
