@@ -15,13 +15,15 @@ which never leave the disc short of robots, so the mode changes nothing in them.
 ``--heal`` runs the other question, on many shapes rather than one disc: every shipped shape
 (the two-group scenario too) and random shapes of one and two groups as the property tests draw
 them, each formed under each strategy for seeds 0-19, then 20 % of its robots removed at random;
-each must heal, or re-form smaller and heal that, within `HEAL_LIMIT` steps. Writes
-``docs/heal.json`` and prints every run that did not, with the command that repeats it.
+each must heal, or re-form smaller and heal that, within `HEAL_LIMIT` steps. With one robot
+per cell and ``--on-loss keep`` a loss leaves nothing to refill (the shape is formed as far as
+the survivors go), so ``--on-loss rescale`` is the run that makes them re-form. Writes
+``docs/heal-ON_LOSS.json`` and prints every run that did not, with how to repeat it.
 
     .venv/bin/python scripts/faults.py [--strategies optimal greedy random paper] [--cells 1000]
         [--on-loss keep|rescale] [--out docs/faults-keep.json] [--no-pictures | --pictures-only]
-    .venv/bin/python scripts/faults.py --heal [--strategies ...] [--seeds 20] [--jobs 2]
-        [--shapes horse.png ...] [--random 20] [--out docs/heal.json]
+    .venv/bin/python scripts/faults.py --heal [--on-loss rescale] [--strategies ...]
+        [--seeds 20] [--jobs 2] [--shapes horse.png ...] [--random 20] [--out FILE]
 """
 
 from __future__ import annotations
@@ -73,13 +75,13 @@ day on this machine, so it forms them at 16 cells across (60 to 180 cells); `--p
 changes it."""
 
 
-def heal_case(case: tuple[str, str, int]) -> dict:
+def heal_case(case: tuple[str, str, int, str]) -> dict:
     """Form `shape` (a shipped file, or ``random:N`` / ``random2:N``: random shapes of one
     or two groups) under `strategy` with `seed`, remove 20 % of its robots at random, and run
     until it is whole again (re-formed smaller if need be) or `HEAL_LIMIT` steps have gone."""
-    shape, strategy, seed = case
+    shape, strategy, seed, on_loss = case
     started = time.perf_counter()
-    swarm = heal_swarm(shape, strategy, seed)
+    swarm = heal_swarm(shape, strategy, seed, on_loss)
     while not swarm.complete and swarm.step_count < LIMIT[strategy]:
         swarm.step()
     formed = swarm.step_count if swarm.complete else None
@@ -109,14 +111,15 @@ def heal_case(case: tuple[str, str, int]) -> dict:
     }
 
 
-def heal_swarm(shape: str, strategy: str, seed: int) -> Swarm:
+def heal_swarm(shape: str, strategy: str, seed: int, on_loss: str = "keep") -> Swarm:
     """The swarm of a `heal_case`, before its first step."""
     if shape.startswith("random"):
         groups = 2 if shape.startswith("random2") else 1
         world = random_world(np.random.default_rng(int(shape.split(":")[1])), groups)
-        return Swarm(world, create(strategy), seed)
+        return Swarm(world, create(strategy), seed, Params(on_loss=on_loss))
     cells = HEAL_CELLS.get(strategy) if SHAPES.joinpath(shape).suffix == ".png" else None
-    return build(configure(SHAPES / shape, strategy=strategy, seed=seed, cells=cells))
+    config = configure(SHAPES / shape, strategy=strategy, seed=seed, cells=cells, on_loss=on_loss)
+    return build(config)
 
 
 def random_world(rng: np.random.Generator, groups: int) -> World:
@@ -131,12 +134,14 @@ def random_world(rng: np.random.Generator, groups: int) -> World:
     return build_world(specs)
 
 
-def heal_all(strategies: list[str], shapes: list[str], seeds: int, jobs: int, out: Path) -> int:
+def heal_all(
+    strategies: list[str], shapes: list[str], seeds: int, jobs: int, out: Path, on_loss: str
+) -> int:
     """Every `heal_case` of these, on `jobs` processes; a summary per shape and strategy, and
     every run that did not heal, with how to repeat it."""
     import multiprocessing
 
-    cases = [(shape, strategy, seed) for strategy in strategies for shape in shapes
+    cases = [(shape, strategy, seed, on_loss) for strategy in strategies for shape in shapes
              for seed in range(seeds)]  # fmt: skip
     results = []
     with multiprocessing.Pool(jobs) as pool:
@@ -320,8 +325,9 @@ def main() -> None:
         )
         shapes = shipped + [f"{kind}:{n}" for kind in ("random", "random2")
                             for n in range(args.random)]  # fmt: skip
-        out = args.out if args.out != DOCS / "faults.json" else DOCS / "heal.json"
-        sys.exit(1 if heal_all(args.strategies, shapes, args.seeds, args.jobs, out) else 0)
+        out = args.out or DOCS / f"heal-{args.on_loss}.json"
+        failed = heal_all(args.strategies, shapes, args.seeds, args.jobs, out, args.on_loss)
+        sys.exit(1 if failed else 0)
     if args.pictures_only:
         pictures(args.strategies, args.cells, DOCS)
         return

@@ -28,6 +28,20 @@ def test_the_fault_figures_run_on_a_small_disc(tmp_path):
     assert short["random"]["cells_left_open"] == short["random"]["robots_removed"]
 
 
+def test_the_heal_table_runs_and_re_forms_smaller_when_asked(tmp_path):
+    """Its default output was None (it crashed at the end of an hour's runs), and it ignored
+    `--on-loss`, so under the default keep a loss with no spares was 'healed' at once."""
+    out = tmp_path / "heal.json"
+    command = [sys.executable, "scripts/faults.py", "--heal", "--strategies", "optimal"]
+    command += ["--shapes", "square.png", "--random", "0", "--seeds", "2", "--jobs", "1"]
+    command += ["--on-loss", "rescale", "--out", str(out)]
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
+    subprocess.run(command, cwd=ROOT, env=env, check=True, capture_output=True, timeout=300)
+    runs = json.loads(out.read_text())
+    assert len(runs) == 2 and all(run["healed"] for run in runs)
+    assert all(run["scale"] < 1 and run["heal_steps"] > 0 for run in runs)
+
+
 def pictures_script(*args: str, timeout: int = 300) -> str:
     command = [sys.executable, "scripts/make_docs_pictures.py", *args]
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
