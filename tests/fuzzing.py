@@ -1463,9 +1463,11 @@ class Named:
         read = [args.start if isinstance(args.start, Path) else None, args.path]
         if args.load_state is not None and args.load_state != args.save_state:
             read.append(args.load_state)
-        if args.path is not None and args.path.suffix.lower() == ".toml":
+        scenario = folder / args.path if args.path is not None else None
+        # a pipe named as the scenario would block the reading here (swarmshape refuses it)
+        if scenario is not None and scenario.suffix.lower() == ".toml":
             with contextlib.suppress(OSError, ValueError):
-                read += scenario_images(folder / args.path)
+                read += scenario_images(scenario) if scenario.is_file() else []
         module = (args.strategy or "").rpartition(":")[0]
         read.append(Path(module) if module.endswith(".py") else None)
         with contextlib.suppress(ValueError):  # a NUL in a name
