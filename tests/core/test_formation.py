@@ -171,6 +171,36 @@ def test_a_spare_robot_boxed_in_its_shape_hands_a_mover_its_way():
     assert swarm.complete and swarm.overlap_total == 0
 
 
+def packed_in_a_corner(strategy: str, side: int, seed: int) -> Swarm:
+    """A `side` x `side` square formed by as many robots, all starting packed into the arena's
+    far corner: the first movers are boxed in by robots still waiting."""
+    specs = [GroupSpec("g", Shape(np.ones((side, side), dtype=bool)), (200, 60, 60), side**2)]
+    world = build_world(specs, (30, 24))
+    x, y = np.meshgrid(np.arange(30 - side, 30), np.arange(24 - side, 24), indexing="ij")
+    return Swarm(world, create(strategy), seed, start=np.stack([x.ravel(), y.ravel()], 1))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_papers_mover_boxed_in_by_waiting_robots_gets_out(seed):
+    """A robot waiting in the paper's mover's way, with nowhere to step aside, takes the
+    mover's target (the paper picks its movers at random, so any waiting robot will do). When
+    only spare robots could, 19 of 20 such starts never formed (nor did the S of
+    `scripts/faults.py --heal`, 16 cells, seed 18)."""
+    swarm = packed_in_a_corner("paper", 4, seed)
+    run(swarm, max_steps=3000)
+    assert swarm.complete and swarm.overlap_total == 0
+
+
+@pytest.mark.parametrize("strategy", ["optimal", "greedy"])
+def test_a_planned_robot_handing_a_mover_its_way_hands_it_its_plan_too(strategy):
+    """The robot that takes over is busy now: the mover must leave in its place when its plan
+    says. Without `OneShot.on_hand_over` the mover was never sent and every start like this one
+    stopped a cell or more short."""
+    swarm = packed_in_a_corner(strategy, 5, seed=0)
+    run(swarm, max_steps=3000)
+    assert swarm.complete and swarm.overlap_total == 0
+
+
 @settings(max_examples=max(1, settings().max_examples // 4), deadline=None)
 @given(
     bits=st.lists(st.booleans(), min_size=30, max_size=30),

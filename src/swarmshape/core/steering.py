@@ -70,6 +70,12 @@ class Strategy(Plugin):
         is each old target's new index, -1 where it went away. Keep target indices the strategy
         holds in step (they would name other cells, or none). Default: it holds none."""
 
+    def on_hand_over(self, swarm: SwarmView, movers: np.ndarray, idle: np.ndarray) -> None:
+        """Each of `idle`, boxed in a mover's way, took over that mover's target, and each of
+        `movers` waits or wanders in its place. A strategy that plans ahead for waiting robots
+        passes each idle robot's plan on to its mover: the idle robot is busy now, and the mover
+        would otherwise never be sent. Default: it plans nothing ahead."""
+
     def drive(self, swarm: Swarm) -> Steering:
         return Steering(swarm, self)
 
@@ -523,13 +529,6 @@ class Steering:
         trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
         caught = idle & same_group & trapped
         if caught.any():
-            # a waiting robot may yet be sent to a target of the strategy's plan, unless none
-            # is left open: then it is spare, and only a hand-over moves it on
-            groups = np.unique(swarm.group[robot[caught]]).tolist()
-            handed_out = np.zeros(len(swarm.world.groups), dtype=bool)
-            handed_out[groups] = [len(self.open_targets(g)) == 0 for g in groups]
-            caught &= (state == WANDERING) | handed_out[swarm.group[robot]]
-        if caught.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
             return self._make_way(blocked[~caught], blocker[~caught])
         if self.motion is Motion.ROUTE:
@@ -588,12 +587,14 @@ class Steering:
         (`scripts/faults.py --heal`). The idle robot stands one cell further along the mover's
         way, so every hand-over shortens the trips left and they cannot go on for ever; the
         mover it replaces may be in the next mover's way in turn, and so on out. The idle robot
-        goes on round whatever the mover was going round, as after a swap."""
+        goes on round whatever the mover was going round, as after a swap. Whatever the
+        strategy still plans for the idle robot passes to the mover (`Strategy.on_hand_over`)."""
         waited = self.swarm.state[idle] == WAITING
         self.assign(idle, self.target[movers])
         self.routed[idle] = self.routed[movers]
         self.release(movers)
         self.swarm.wait(movers[waited])
+        self.strategy.on_hand_over(self.view, movers, idle)
 
     def _swap_with_settled(self, movers: np.ndarray, settled: np.ndarray) -> None:
         """The settled robot takes the mover's target and moves on; the mover takes its cell."""

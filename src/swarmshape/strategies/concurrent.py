@@ -88,6 +88,13 @@ class OneShot(Strategy):
         planned = self._planned >= 0
         self._planned[planned] = renumber[self._planned[planned]]
 
+    def on_hand_over(self, swarm: SwarmView, movers: np.ndarray, idle: np.ndarray) -> None:
+        """The movers wait in the idle robots' places, so they leave when and where those would
+        have (under the 10,000-robot disc's plan, an idle robot sent on without this was sent
+        its own cell later too, and its mover never: the disc stopped 4 cells short)."""
+        for plan in (self._planned, self._leaves_at):
+            plan[movers], plan[idle] = plan[idle], plan[movers]
+
     def on_fault(self, swarm: SwarmView, group: int, robots: np.ndarray) -> None:
         """A fault opened cells: the idle robots (those not yet sent off among them) are matched
         to the open cells the same way, as after a reshape."""
