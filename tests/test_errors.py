@@ -53,6 +53,7 @@ def bad_files(tmp_path_factory) -> Path:
     dots.save(folder / "dots.png")
     (folder / "bad.toml").write_text("groups = [ {")
     (folder / "typed.toml").write_text("[[groups]]\nshape = 3\n")
+    (folder / "long.toml").write_text(f"seed = {'9' * 5000}\n[[groups]]\nshape = 'one.png'\n")
     (folder / "typo.toml").write_text("[[groups]]\nshap = 'one.png'\n")
     (folder / "typo-sweep.toml").write_text(
         "shapes = ['one.png']\nstrategies = ['optimal']\nspeed = 3\n"

@@ -352,10 +352,13 @@ def test_events_parse_from_plain_values_and_text():
             events_from_values(bad, "faults")
 
 
-@pytest.mark.parametrize("text", ["0.2@\u00b2", "\u00b2@3", "0.2@\u2460", "1\u00b9@3"])
+@pytest.mark.parametrize(
+    "text", ["0.2@\u00b2", "\u00b2@3", "0.2@\u2460", "1\u00b9@3", "0.2@" + "9" * 5000]
+)
 def test_digits_that_int_refuses_are_one_clear_error(text):
     """Issue 29, case 12: a superscript or circled digit passed str.isdigit, which int()
-    then refused with a traceback (--fail, --stall, --fail-region, scenario and sweep values)."""
+    then refused with a traceback (--fail, --stall, --fail-region, scenario and sweep values);
+    so did a step of more digits than int() reads (the fuzz, seed 38)."""
     with pytest.raises(FaultError, match="expects"):
         parse_event(text, "stall", "--stall")
     with pytest.raises(FaultError, match="expects"):

@@ -233,12 +233,14 @@ def test_a_row_whose_run_key_disagrees_with_its_settings_is_damaged(tiny, swept,
     assert out.read_bytes() == b"".join(lines)
 
 
-def test_a_deeply_nested_run_key_is_damaged_not_a_crash(tiny, swept):
-    """Found by the fuzz: a run key nested 5,000 deep was a RecursionError."""
+@pytest.mark.parametrize("key", ["[" * 5000 + "]" * 5000, '{"seed": ' + "9" * 5000 + "}"])
+def test_a_run_key_json_cannot_read_is_damaged_not_a_crash(tiny, swept, key):
+    """Found by the fuzz: a run key nested 5,000 deep was a RecursionError; a number of more
+    digits than int() reads, a ValueError that is no JSONDecodeError."""
     out, whole = swept
     lines = whole.decode().splitlines(keepends=True)
     fields = next(csv.reader([lines[2]]))
-    fields[0] = "[" * 5000 + "]" * 5000
+    fields[0] = key
     buffer = io.StringIO()
     csv.writer(buffer, lineterminator="\n").writerow(fields)
     lines[2] = buffer.getvalue()

@@ -191,7 +191,15 @@ def test_a_sweep_file_of_a_too_long_name_is_not_there(tmp_path):
 
 def test_a_sweep_file_nested_too_deeply_is_one_clear_error(tmp_path):
     path = sweep_file(tmp_path, LINE + f"agents = {'[' * 3000}{']' * 3000}\n")
-    with pytest.raises(InputError, match="nested too deeply to be a sweep file"):
+    with pytest.raises(InputError, match=r"nested too deeply to be a sweep \.toml file"):
+        read_sweep(path)
+
+
+def test_a_sweep_file_with_a_number_longer_than_int_reads_is_one_clear_error(tmp_path):
+    """Found by the fuzz (seed 38): tomllib reads integers with int(), whose ValueError past
+    4,300 digits is not a TOMLDecodeError, and was an internal error."""
+    path = sweep_file(tmp_path, LINE + f"seeds = {'9' * 5000}\n")
+    with pytest.raises(InputError, match="holds a number of more than 4,300 digits"):
         read_sweep(path)
 
 

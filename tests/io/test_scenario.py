@@ -72,5 +72,13 @@ def test_noise_settings_reach_the_run_and_a_bad_one_names_the_file(tmp_path):
 def test_a_scenario_nested_deeper_than_python_recurses_is_one_clear_error(tmp_path):
     """Found by the fuzz: tomllib's RecursionError was an internal error."""
     path = write(tmp_path, f"seed = {'[' * 3000}{']' * 3000}\n[[groups]]\nshape = 'line.png'\n")
-    with pytest.raises(InputError, match=r"s\.toml: nested too deeply to be a scenario"):
+    with pytest.raises(InputError, match=r"s\.toml: nested too deeply to be a \.toml scenario"):
+        scenario_settings(path)
+
+
+def test_a_scenario_with_a_number_longer_than_int_reads_is_one_clear_error(tmp_path):
+    """Found by the fuzz (seed 38): tomllib's int() stops at 4,300 digits with a ValueError
+    that is not a TOMLDecodeError, and it was an internal error."""
+    path = write(tmp_path, f"seed = {'9' * 5000}\n[[groups]]\nshape = 'line.png'\n")
+    with pytest.raises(InputError, match=r"s\.toml: holds a number of more than 4,300 digits"):
         scenario_settings(path)

@@ -203,11 +203,14 @@ def events_from_values(values: Any, where: str) -> tuple[FaultEvent, ...]:
 def _split(text: str, option: str, form: str) -> tuple[str, int]:
     """`text`'s part before its last @, and the step after it. A step is decimal digits, the
     ones int() reads (str.isdigit also takes superscripts and circled digits, which it does
-    not)."""
+    not), and no more of them than int() reads (4,300)."""
     head, at, step = text.rpartition("@")
     if not at or not step.strip().isdecimal() or not head:
         raise FaultError(f"{option} expects {form}, got {text!r}")
-    return head, int(step)
+    try:
+        return head, int(step)
+    except ValueError:
+        raise FaultError(f"{option} expects {form}, got a step {len(step):,} digits long") from None
 
 
 def _reason(error: Exception) -> str:

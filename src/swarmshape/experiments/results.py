@@ -280,7 +280,7 @@ def _run(key: str) -> dict[str, Any] | None:
     """A run's settings from its key; None for text that is no run key."""
     try:
         run = json.loads(key)
-    except (json.JSONDecodeError, RecursionError):
+    except (ValueError, RecursionError):  # past 4,300 digits int() raises a plain ValueError
         return None
     return run if isinstance(run, dict) else None
 

@@ -25,7 +25,6 @@ import signal
 import sys
 import threading
 import time
-import tomllib
 from collections.abc import Callable, Collection, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
@@ -41,7 +40,7 @@ from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
-from swarmshape.io.files import readable_file
+from swarmshape.io.files import read_toml
 from swarmshape.runs import Observer, build, load_world, registered_strategy, run
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
@@ -148,15 +147,7 @@ def _read_toml(path: Path) -> dict[str, Any]:
     a device such as /dev/zero fill the memory."""
     if not os.path.exists(path):  # False, not an error, for a name too long to look up
         raise InputError(f"{path}: no such sweep file")
-    readable_file(path, "a sweep .toml file")
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise InputError(f"{path}: cannot read the sweep file ({error.strerror})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise InputError(f"{path}: not valid TOML ({error})") from None
-    except RecursionError:  # tomllib recurses once per level of nesting
-        raise InputError(f"{path}: nested too deeply to be a sweep file") from None
+    return read_toml(path, "a sweep .toml file")
 
 
 def _values(path: Path, key: str, value: Any, kind: str, fits: Callable[[Any], bool]) -> list:

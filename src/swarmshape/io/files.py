@@ -13,8 +13,10 @@ import os
 import shutil
 import stat
 import tempfile
+import tomllib
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 from swarmshape.errors import InputError
 
@@ -140,6 +142,22 @@ def readable_file(path: Path, expected: str, error: type[InputError] = InputErro
     if not stat.S_ISREG(mode):
         raise error(f"{path}: is not a regular file (a pipe or a device?), expected {expected}")
     return path
+
+
+def read_toml(path: Path, expected: str, error: type[InputError] = InputError) -> dict[str, Any]:
+    """The table of the TOML file `path` (`expected`, e.g. "a sweep file"), read only if it is
+    a regular file (`readable_file`); whatever is wrong with it is one line (an `error`)."""
+    readable_file(path, expected, error)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as failure:
+        raise error(f"{path}: cannot read it ({failure.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as failure:
+        raise error(f"{path}: not valid TOML ({failure})") from None
+    except ValueError:  # tomllib reads integers with int(), which stops at 4,300 digits
+        raise error(f"{path}: holds a number of more than 4,300 digits") from None
+    except RecursionError:  # tomllib recurses once per level of nesting
+        raise error(f"{path}: nested too deeply to be {expected}") from None
 
 
 def check_output(

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import itertools
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -42,7 +41,7 @@ from swarmshape.io.bitmap import (
     load_grid,
     read_picture,
 )
-from swarmshape.io.files import readable_file
+from swarmshape.io.files import read_toml, readable_file
 
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
@@ -115,16 +114,7 @@ def scenario_settings(path: str | Path) -> dict[str, Any]:
 
 
 def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
-    readable_file(path, "a .toml scenario", ScenarioError)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise ScenarioError(f"{path}: not valid TOML ({error})") from None
-    except RecursionError:  # tomllib recurses once per level of nesting
-        raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
-    except OSError as error:
-        raise ScenarioError(f"{path}: cannot read it ({error.strerror})") from None
-    return data, _Where(path)
+    return read_toml(path, "a .toml scenario", ScenarioError), _Where(path)
 
 
 def _group(where: _Where, index: int, table: Any, image: ImageOptions) -> GroupSpec:
