@@ -16,7 +16,9 @@ import collections
 import os
 import random
 import re
+import resource
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -122,23 +124,44 @@ def signature(problem: str, outcome: fuzzing.Outcome, crash: str, folder: Path) 
     return (re.sub(r"\d+", "N", problem.split(":")[0]), outcome.status, re.sub(r"\d+", "N", text))
 
 
+def run_process(case: fuzzing.Case) -> fuzzing.Outcome:
+    """`case` in a real swarmshape process, cut short as its `fuzzing.Ending` says (a file size
+    limit, SIGTERM after some seconds), as the fuzz's forked copy runs it."""
+    ending = case.ending
+
+    def limit_files() -> None:  # in the child, before swarmshape starts
+        if ending.file_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (ending.file_limit,) * 2)
+
+    started = time.perf_counter()
+    with subprocess.Popen(
+        [sys.executable, "-m", "swarmshape", *case.argv], cwd=case.folder, text=True,
+        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        preexec_fn=limit_files, start_new_session=True,
+    ) as process:  # fmt: skip
+        stop = ending.stop_after
+        try:
+            out, err = process.communicate(timeout=fuzzing.TIMEOUT if stop is None else stop)
+        except subprocess.TimeoutExpired:  # hung, or due to be stopped
+            if stop is not None:
+                process.send_signal(signal.SIGTERM)
+            try:
+                out, err = process.communicate(timeout=0 if stop is None else fuzzing.TIMEOUT)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.communicate()
+                return fuzzing.Outcome(None, "", "", time.perf_counter() - started)
+    return fuzzing.Outcome(process.returncode, out, err, time.perf_counter() - started)
+
+
 def replay(seed: int, index: int, kinds: list[str], material: Path, work: Path) -> int:
     """Make case `index` afresh and run it in a real swarmshape process; print what happened."""
     case = make(seed, index, kinds, material, work / f"case-{index}")
     named = fuzzing.Named(case)
     before = fuzzing.snapshot(case.folder)
     print(case.command())
-    started = time.perf_counter()
-    try:
-        done = subprocess.run(
-            [sys.executable, "-m", "swarmshape", *case.argv], cwd=case.folder, capture_output=True,
-            text=True, timeout=fuzzing.TIMEOUT, stdin=subprocess.DEVNULL,
-        )  # fmt: skip
-        outcome = fuzzing.Outcome(
-            done.returncode, done.stdout, done.stderr, time.perf_counter() - started
-        )
-    except subprocess.TimeoutExpired:
-        outcome = fuzzing.Outcome(None, "", "", time.perf_counter() - started)
+    outcome = run_process(case)
     print(f"exit status {outcome.status}\n--- stdout\n{outcome.stdout}--- stderr\n{outcome.stderr}")
     found = fuzzing.problems(named, outcome, before, fuzzing.snapshot(case.folder))
     print("problems: " + ("; ".join(found) if found else "none"))
