@@ -171,6 +171,27 @@ def test_a_spare_robot_boxed_in_its_shape_hands_a_mover_its_way():
     assert swarm.complete and swarm.overlap_total == 0
 
 
+@pytest.mark.parametrize(
+    ("g0", "g1", "agents", "seed"),
+    [
+        ("###.. ..... #.#.# ..###", "...#. ....# #..## ..#.#", (14, 12), 11),
+        ("..### ###.. ##... ##.##", ".#..# ..### .###. ##.#.", (15, 14), 18),
+    ],
+)
+def test_the_papers_movers_of_two_groups_meeting_head_on_pass(g0, g1, agents, seed):
+    """`scripts/faults.py --heal` found them (random2:0 and random2:5): of two movers in each
+    other's way, the one that kept its way stayed at its patience while the other moved off,
+    then planned too, round the other's old cell, went the same way round and met it again,
+    for 40,000 steps. A mover now plans afresh only as its wait reaches its patience."""
+    specs = [
+        GroupSpec(f"g{index}", Shape(grid_from(bits)), (1, 2, 3), count)
+        for index, (bits, count) in enumerate(zip((g0, g1), agents, strict=True))
+    ]
+    swarm = Swarm(build_world(specs), create("paper"), seed)
+    run(swarm, max_steps=5000)
+    assert swarm.complete and swarm.overlap_total == 0
+
+
 def packed_in_a_corner(strategy: str, side: int, seed: int) -> Swarm:
     """A `side` x `side` square formed by as many robots, all starting packed into the arena's
     far corner: the first movers are boxed in by robots still waiting."""

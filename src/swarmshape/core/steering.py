@@ -646,10 +646,10 @@ class Steering:
         self, starters: np.ndarray, stuck: np.ndarray, steps: _Steps, winners: np.ndarray
     ) -> None:
         """Moving on resets a mover's wait; waiting behind something at rest adds to it, and
-        at `patience` steps the mover plans afresh. Of two movers in each other's way that
-        would plan afresh in the same step, only the lower-numbered one does, and the other
-        keeps its way: planning together, each went round the other side by side, met again,
-        and so for good (the paper's movers of two groups passing)."""
+        as the wait reaches `patience` steps the mover plans afresh. Of two movers in each
+        other's way that would plan afresh in the same step, only the lower-numbered one does,
+        and the other keeps its way: planning together, each went round the other side by
+        side, met again, and so for good (the paper's movers of two groups passing)."""
         swarm = self.swarm
         moved = np.zeros(len(swarm.state), dtype=bool)
         moved[winners] = True
@@ -657,8 +657,12 @@ class Steering:
         self.blocked[starters[moved[starters]]] = 0
         robot = np.maximum(steps.blocker, 0)
         at_rest = (steps.blocker < 0) | (swarm.ahead[robot] == 0)
-        self.blocked[steps.blocked[at_rest]] += 1
-        replan = starters[self.blocked[starters] == self.swarm.params.patience]
+        waited = steps.blocked[at_rest]
+        self.blocked[waited] += 1
+        # only a wait that reaches patience now: the mover of a pair that kept its way stays at
+        # patience while the other moves off, and planning then, round the other's old cell,
+        # it went the same way round and met it again, for good (paper, two random shapes)
+        replan = waited[self.blocked[waited] == self.swarm.params.patience]
         waits_for = np.full(len(swarm.state), -1, dtype=np.int64)
         waits_for[steps.blocked] = steps.blocker
         other = waits_for[replan]
