@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import signal
+import time
 from pathlib import Path
 
 import numpy as np
@@ -11,10 +14,10 @@ import pytest
 from PIL import Image
 
 from swarmshape.cli import main
-from swarmshape.errors import InputError
+from swarmshape.errors import InputError, Terminated
 from swarmshape.io.bitmap import load_grid
 from swarmshape.io.scenario import read_start_cells
-from swarmshape.session import SHADES
+from swarmshape.session import SHADES, ended_by_signals
 from swarmshape.ui.render import SEED_GREEN
 from tests import pictures
 from tests.conftest import SHAPES, grid_from, world_of
@@ -264,3 +267,16 @@ def test_preview_shows_a_users_picture_beside_the_shape_it_keeps(tmp_path, capsy
         assert shown == cells and len(picture) == len(cells) and set(picture) <= set(SHADES)
     assert main([str(path), "--preview", "--cells", "32"]) == 0
     assert "raise --cells to" in capsys.readouterr().err
+
+
+def test_a_signal_that_a_library_turns_into_its_own_error_still_ends_the_run():
+    """The fuzz (seed 39) sent SIGTERM while pygame loaded a font: pygame's file reader turned
+    `Terminated` into "TypeError: not a file object", and the run ended as an internal error
+    (exit 1) instead of 143."""
+    with pytest.raises(Terminated) as ended, ended_by_signals():
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)  # the handler raises here, at once
+        except Terminated:
+            raise TypeError("not a file object") from None  # as pygame's reader does
+    assert ended.value.code == 128 + signal.SIGTERM

@@ -242,17 +242,26 @@ class Session:
 @contextlib.contextmanager
 def ended_by_signals() -> Iterator[None]:
     """SIGTERM and SIGHUP raise `Terminated` for a while, instead of ending the process where
-    it stands (only the main thread receives signals; elsewhere nothing changes)."""
+    it stands (only the main thread receives signals; elsewhere nothing changes). A library
+    that the signal strikes inside may turn it into an error of its own (pygame, loading a
+    font, raised "TypeError: not a file object": an internal error, found by the fuzz): after
+    a signal, whatever error comes out is the signal's."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    received: list[int] = []
 
     def end(number: int, _frame: object) -> None:
+        received.append(number)
         raise Terminated(128 + number)
 
     previous = {number: signal.signal(number, end) for number in (signal.SIGTERM, signal.SIGHUP)}
     try:
         yield
+    except Exception as error:
+        if received:
+            raise Terminated(128 + received[0]) from error
+        raise
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
