@@ -145,8 +145,8 @@ def readable_file(path: Path, expected: str, error: type[InputError] = InputErro
 
 
 def read_toml(path: Path, expected: str, error: type[InputError] = InputError) -> dict[str, Any]:
-    """The table of the TOML file `path` (`expected`, e.g. "a sweep file"), read only if it is
-    a regular file (`readable_file`); whatever is wrong with it is one line (an `error`)."""
+    """The table of the TOML file `path` (`expected`, e.g. "a .toml scenario"), read only if it
+    is a regular file (`readable_file`); whatever is wrong with it is one line (an `error`)."""
     readable_file(path, expected, error)
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
