@@ -2,6 +2,11 @@
 and strategy (every other varied setting too), so that a table in the docs is made, not typed.
 
 python scripts/compare.py sweeps/mean-shift.csv sweeps/mean-shift-fig4.csv
+python scripts/compare.py --update docs/mean-shift.md
+
+With ``--update FILE``, every block of FILE between ``<!-- compare: CSV ... -->`` and
+``<!-- /compare -->`` is replaced by the table of those CSVs (paths from the repository's
+root), so the tables in the docs are remade, never typed.
 
 Columns: runs; formed (every target filled, its ``steps`` column set); steps to form, and their
 ratio to the makespan lower bound, as the median and range over the runs that formed; the
@@ -11,6 +16,7 @@ least-distance ratio; messages per robot per step; the least coverage reached; w
 from __future__ import annotations
 
 import argparse
+import re
 import statistics
 import sys
 from collections import defaultdict
@@ -33,20 +39,35 @@ HEADER = (
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("results", type=Path, nargs="+")
+    parser.add_argument("results", type=Path, nargs="*")
+    parser.add_argument("--update", type=Path, help="a Markdown file whose tables to remake")
     args = parser.parse_args()
-    rows = []
     try:
-        for path in args.results:
-            rows += read_rows(path)
-    except InputError as error:
+        if args.update is not None:
+            text = BLOCK.sub(_remade, args.update.read_text())
+            args.update.write_text(text)
+        if args.results:
+            print(table(_rows(args.results)))
+    except (InputError, OSError) as error:
         print(f"compare.py: error: {error}", file=sys.stderr)
         return 2
-    if not rows:
-        print("compare.py: error: no runs in the results yet", file=sys.stderr)
-        return 2
-    print(table(rows))
     return 0
+
+
+BLOCK = re.compile(r"(<!-- compare: ([^>]+?) -->\n)(.*?)(<!-- /compare -->)", re.S)
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _remade(block: re.Match[str]) -> str:
+    paths = [ROOT / name for name in block.group(2).split()]
+    return block.group(1) + table(_rows(paths)) + "\n" + block.group(4)
+
+
+def _rows(paths: list[Path]) -> list[dict[str, str]]:
+    rows = [row for path in paths for row in read_rows(path)]
+    if not rows:
+        raise InputError(f"{', '.join(map(str, paths))}: no runs in them yet")
+    return rows
 
 
 def table(rows: list[dict[str, str]]) -> str:

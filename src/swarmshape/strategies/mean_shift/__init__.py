@@ -210,7 +210,7 @@ class MeanShift(Program):
         in_shape = sense.blueprint.contains(np.repeat(sense.group, len(ways)), cells)
         open_ = ~taken.reshape(n, -1)
         distance = holes.hole_distance(around, offset, cap)
-        mine = memory.to_waiting[:, None]
+        mine = np.minimum(memory.to_waiting, cap)[:, None]
         score = command @ ways.T
         outward = open_ & np.where(toward.any(axis=1)[:, None], toward, score > 0)
         closer = open_ & in_shape.reshape(n, -1) & (mine < distance)

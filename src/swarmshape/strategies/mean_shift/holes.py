@@ -101,7 +101,7 @@ def waiting_hops(
     cap: int,
 ) -> np.ndarray:
     """Each robot's hops to the nearest robot outside its shape through robots inside it, side
-    by side (`cap`: none known, or the robot is not inside)."""
+    by side (`relay.NONE`: none known, or the robot is not inside)."""
     outside_beside = np.zeros(len(sense), dtype=bool)
     outside_beside[sense.owner[around.beside & ~around.inside]] = True
     source = inside & localised & outside_beside
@@ -109,7 +109,7 @@ def waiting_hops(
     none = np.zeros((len(sense.owner), 0)), np.zeros((len(sense), 0))
     told = relay.heard(said.to_waiting)
     hops, _ = relay.relay(sense, passes, told, none[0], source, none[1], cap)
-    return np.where(inside & localised, hops, cap)
+    return np.where(inside & localised & (hops < cap), hops, relay.NONE)
 
 
 def hole_distance(around: Around, base: np.ndarray, cap: int) -> np.ndarray:
