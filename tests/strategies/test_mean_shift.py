@@ -40,7 +40,7 @@ def test_the_same_seed_gives_the_same_run():
     a, b = (formed("star.png", cells=12, seed=7) for _ in "ab")
     assert a.step_count == b.step_count
     assert np.array_equal(a.cell, b.cell)
-    assert np.array_equal(a.driver.memory.to_waiting, b.driver.memory.to_waiting)
+    assert np.array_equal(a.driver.memory.news_hops, b.driver.memory.news_hops)
 
 
 def test_without_the_entering_command_robots_outside_never_come_in():

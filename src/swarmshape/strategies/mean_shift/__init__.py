@@ -12,15 +12,15 @@ Each step a robot:
 3. adds the paper's *exploration* command: the mean shift toward the unoccupied shape cells it
    senses, weighed by a raised-cosine kernel (`explore.mean_shift`);
 4. moves one cell the way that sum points most, among the cells it may enter: a robot inside
-   the shape stays inside it and enters only cells that bring the empty cell it leaves behind
-   no farther from the robots still outside (`holes`); a robot outside that can reach an empty
-   shape cell it senses takes only moves that bring it nearer one (`explore.nearer`), and
-   leaves alone a hole that a robot inside is bringing to it (`holes.coming`);
+   the shape stays inside it and enters only cells deeper in it than its own, so that the
+   empty cell it leaves lies nearer the robots outside, and one in place enters only a cell
+   they cannot reach (`holes`); a robot outside that can reach an empty shape cell it senses
+   takes only moves that bring it nearer one (`explore.nearer`);
 5. keeps going without braking while the same move is still its choice from the cell it is
    coming to (cruising).
 
-A robot at rest on a shape cell counts as in place; it moves again only to fill a hole beside
-it. What differs from the continuous original, and why:
+A robot at rest on a shape cell counts as in place; it moves again only to carry a hole
+beside it out. What differs from the continuous original, and why:
 
 - **No negotiation.** The paper's robots agree on the shape's position and heading by
   consensus seeded by a fifth of them, the informed robots. Here the seeds are the informed
@@ -40,7 +40,7 @@ it. What differs from the continuous original, and why:
   would hold a robot beyond them pushing against them for ever.
 - **Hole transport.** The paper's coverage counts a cell covered within a robot's avoidance
   distance, so a full shape needs no exact tiling. With a robot per cell, the last empty cells
-  must travel through the robots in place to those still outside (`holes`); on its own the
+  must travel out through the robots in place to those still outside (`holes`); on its own the
   mean shift leaves them wandering deep inside. The paper's shape is one piece; robots at its
   full rim follow news of an empty cell elsewhere, so separate pieces form too.
 
@@ -52,6 +52,7 @@ paper's or an option.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import ClassVar
 
 import numpy as np
@@ -62,18 +63,17 @@ from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register, routes
 from swarmshape.strategies.mean_shift import explore, holes
-from swarmshape.strategies.skills import relay
+from swarmshape.strategies.skills import relay, shape
 from swarmshape.strategies.skills.localise import FIXED, find_the_others, localise
 from swarmshape.strategies.skills.view import View
 
 MESSAGE = Schema(
-    localised=1, cell=2, stays=1, heading=1, progress=1, to_waiting=1, news=2, news_hops=1,
+    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1,
 )  # fmt: skip
 """What a robot broadcasts: whether it knows where it is, its frame cell, whether it stays on it
-next step, the way it is moving and how far along (see `skills.localise`); its hops to a robot
-waiting outside the shape (`holes.waiting_hops`); an empty rim cell it has news of and its hops
-to the robot that sees it (`holes.open_news`). Counts are said as `relay.said` puts them (0:
-none)."""
+next step, the way it is moving and how far along (see `skills.localise`); an empty rim cell it
+has news of and its hops to the robot that sees it (`holes.open_news`), the count said as
+`relay.said` puts it (0: none)."""
 
 LOST, OUTSIDE, INSIDE, IN_PLACE = range(4)
 
@@ -84,13 +84,12 @@ class MeanShift(Program):
     description = "entering and mean shift toward unoccupied cells sensed (Sun et al. 2023)"
     message_size = len(MESSAGE)
     states = ("lost", "outside the shape", "inside, moving", "in place")
-    shown = "to_waiting"
+    shown = "news_hops"
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, LOST),
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
         "roam": Slot(np.int64, 0),
-        "to_waiting": Slot(np.int64, relay.NONE),
         "news": Slot(np.int64, 0, 2),
         "news_hops": Slot(np.int64, relay.NONE),
         "in_place": Slot(bool, False),
@@ -113,16 +112,15 @@ class MeanShift(Program):
         )
         tau: float = option(
             0.5,
-            "cells the mean shift must reach along a move for a robot inside the shape to make "
-            "it when it brings no hole nearer the robots outside",
+            "cells the mean shift must reach along a move for a robot on its way in to enter a "
+            "cell that robots outside can reach too",
             at_least=0.0,
         )
-        roam: float = option(
-            1.0,
-            "how long a robot that sees nobody localised walks straight on average before it "
-            "turns at random, in steps per cell of its shape's longer side (it turns at a wall "
-            "too)",
-            at_least=0.0,
+        roam: int = option(
+            20,
+            "cells a robot that sees nobody localised walks straight on average before it "
+            "turns at random (it turns at a wall too)",
+            at_least=1,
         )
 
     def act(
@@ -141,14 +139,11 @@ class MeanShift(Program):
         inside = blueprint.contains(group, base)
         window = explore.Window(sense.radius)
         on_shape = localised & blueprint.contains(group, frame)
-        around = holes.Around(sense, frame, said, view, localised & ~on_shape)
-        coming = holes.coming(around, window.offsets)
         outside = localised & ~inside
-        shift, free = explore.mean_shift(sense, frame, view, window, offset, outside, coming)
+        shift, free = explore.mean_shift(sense, frame, view, window, offset, outside)
         sees = free.any(axis=1)
-        memory.to_waiting = holes.waiting_hops(sense, said, around, on_shape, localised, cap)
         memory.news_hops, memory.news = holes.open_news(
-            sense, frame, said, around, free, window.offsets, view, cap
+            sense, frame, said, free, window.offsets, view, memory, cap
         )
         pull = explore.entering(sense, base, options.band)
         command = options.exploring * shift + np.where(
@@ -163,13 +158,13 @@ class MeanShift(Program):
         rows = np.flatnonzero(outside & sees)
         toward = np.zeros((len(sense), len(STEPS) - 1), dtype=bool)
         toward[rows] = explore.nearer(view.taken[rows], offset[rows], free[rows], window.offsets)
-        moves = self._moves(sense, memory, view, around, offset, inside, command, toward, cap)
-        span = max(int(np.ptp(cells, axis=0).max()) + 1 for cells in blueprint.cells)
-        turn_every = max(1, round(options.roam * span))
-        lost = find_the_others(sense, memory, said, view, turn_every, rng)
+        moves = self._moves(sense, memory, said, view, offset, inside, command, toward)
+        lost = find_the_others(sense, memory, said, view, options.roam, rng)
         moves = np.where(localised, moves, lost)
         stays = sense.ready & (moves == 0)
-        memory.in_place = on_shape & stays
+        # in place until it moves: a move asked for and not made (the cell taken first) leaves
+        # it where it was, and out of place it would go on to carry open holes (`holes`)
+        memory.in_place = on_shape & sense.ready & (stays | memory.in_place)
         memory.state = np.select(
             [~localised, memory.in_place, on_shape], [LOST, IN_PLACE, INSIDE], OUTSIDE
         )
@@ -180,7 +175,6 @@ class MeanShift(Program):
             stays=stays,
             heading=np.where(stays, 0, heading),
             progress=np.rint(sense.progress * FIXED),
-            to_waiting=relay.said(memory.to_waiting, cap),
             news=memory.news,
             news_hops=relay.said(memory.news_hops, cap),
         )
@@ -190,13 +184,12 @@ class MeanShift(Program):
         self,
         sense: Perception,
         memory: Memory,
+        said: SimpleNamespace,
         view: View,
-        around: holes.Around,
         offset: np.ndarray,
         inside: np.ndarray,
         command: np.ndarray,
         toward: np.ndarray,
-        cap: int,
     ) -> np.ndarray:
         """Each robot's move: the way its command points most among the cells it may enter
         from its base (see the module's description); under way, on straight ahead or none.
@@ -209,14 +202,17 @@ class MeanShift(Program):
         cells = (memory.frame[:, None, :] + into).reshape(-1, 2)
         in_shape = sense.blueprint.contains(np.repeat(sense.group, len(ways)), cells)
         open_ = ~taken.reshape(n, -1)
-        distance = holes.hole_distance(around, offset, cap)
-        mine = np.minimum(memory.to_waiting, cap)[:, None]
         score = command @ ways.T
         outward = open_ & np.where(toward.any(axis=1)[:, None], toward, score > 0)
-        closer = open_ & in_shape.reshape(n, -1) & (mine < distance)
-        level = open_ & in_shape.reshape(n, -1) & (mine == distance)
-        level &= score >= self.options.tau * self.options.exploring
-        inward = np.where(closer.any(axis=1)[:, None], closer, level)
+        groups = np.repeat(sense.group, len(ways))
+        depth = shape.depth(sense.blueprint, groups, cells).reshape(n, -1)
+        here = shape.depth(sense.blueprint, sense.group, memory.frame + offset)
+        deeper = open_ & in_shape.reshape(n, -1) & (depth > here[:, None])
+        # a hole robots coming in can reach is theirs; a robot on its way in takes one too
+        # when the mean shift draws it there
+        reachable = holes.open_holes(sense, memory.frame, said, view, into)
+        drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
+        inward = deeper & (~reachable | drawn)
         allowed = np.where(inside[:, None], inward, outward)
         best = 1 + np.argmax(np.where(allowed, score, -np.inf), axis=1)
         moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)

@@ -65,14 +65,12 @@ def mean_shift(
     window: Window,
     base: np.ndarray,
     outside: np.ndarray,
-    coming: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Per robot, the mean shift from its base toward the unoccupied shape cells it senses
     ``(n, 2)`` (in cells; zero when it senses none), and which cells of the window those are
     ``(n, k)`` (its base never among them). A robot `outside` its shape counts only the cells
-    it can walk to through free cells it senses, and not those `coming` ``(n, k)`` to the
-    robots outside as holes: it cannot pass the robots in place, and cells beyond them, or
-    beside one of them, come to it as holes (`holes`)."""
+    it can walk to through free cells it senses: it cannot pass the robots in place, and
+    cells beyond them come out to it as holes (`holes`)."""
     n, offsets = len(sense), window.offsets
     cells = (frame[:, None, :] + offsets[None]).reshape(-1, 2)
     inside = sense.blueprint.contains(np.repeat(sense.group, len(offsets)), cells)
@@ -82,7 +80,7 @@ def mean_shift(
     free = inside.reshape(n, -1) & ~taken & relative.any(axis=2)
     rows = np.flatnonzero(outside)
     reach = walkable(view, rows, base[rows])
-    free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r] & ~coming[rows]
+    free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
     weight = np.where(free, window.weights(relative), 0.0)
     total = weight.sum(axis=1)
     sees = total > 0

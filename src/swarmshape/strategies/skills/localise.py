@@ -76,8 +76,9 @@ def find_the_others(
     localised neighbour, stopping beside it to take their bearings; with none in sight,
     straight on across the arena at speed, turning at random about every `turn_every` steps
     and wherever blocked (a straight walk crosses an arena in its width, a random one needs
-    its area squared). Robots that do not know where they are tell each other nothing: a count of hops
-    passed among them would only count up for ever where no localised robot is."""
+    its area squared). Robots that do not know where they are tell each other nothing: a
+    count of hops passed among them would only count up for ever where no localised robot
+    is."""
     kin = sense.heard & sense.kin
     known = kin & (sense.seed | (said.localised == 1))
     lost = ~memory.localised & sense.ready

@@ -20,7 +20,8 @@ MARGIN = 2
 def depth(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
     """Each frame cell's taxicab distance to the nearest cell outside its group's shape, 0
     outside it. The seeds count as inside (no robot comes in past them), and so do pockets
-    the shape encloses: a cell is deep when it lies far from where robots come in."""
+    the shape encloses, which no robot comes in from: a cell is deep when it lies far from
+    where robots come in."""
     return box_lookup(_depths(blueprint), groups, frame)
 
 
@@ -36,5 +37,5 @@ def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         grid = np.zeros(size, dtype=bool)
         grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
         inside = ndimage.binary_fill_holes(grid)
-        depths.append((low, np.where(grid, ndimage.distance_transform_cdt(inside, "taxicab"), 0)))
+        depths.append((low, ndimage.distance_transform_cdt(inside, "taxicab")))
     return tuple(depths)
