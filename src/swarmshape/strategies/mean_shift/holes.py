@@ -74,10 +74,12 @@ def open_news(
     it, and that cell: an empty rim cell (beside the outside, `shape.depth` 1) with nobody
     outside beside it, who could step into it (no robot inside moves to a cell as shallow).
     `free` ``(n, k)`` marks the empty shape cells each robot senses at window `offsets`. News
-    of a cell a robot sees taken is stale, and it does not pass it on. A robot that hears no
-    better keeps the news it had (its `memory`), a hop older each step: one following news
-    round the seeds walked out of hearing of the robots that passed it on, lost it, turned
-    back to the shape, heard it again, and so on for ever."""
+    of a cell a robot sees taken is stale, and it does not pass it on. A robot keeps the news it
+    has (its `memory`), a hop older each step, until it sees the cell taken or the count runs
+    out, whatever nearer news it hears: one following news round the seeds walked out of
+    hearing of the robots that passed it on, lost it, turned back, heard it again, and so on
+    for ever; and six robots below the S, hearing of two cells by about as many hops, turned
+    from one to the other as they moved, for good (the S at 14 cells, seeds 0-11)."""
     n, k = free.shape
     groups = np.repeat(sense.group, k)
     cells = (frame[:, None, :] + offsets[None]).reshape(-1, 2)
@@ -102,6 +104,6 @@ def open_news(
     )
     older = np.minimum(memory.news_hops, cap - 1) + 1
     robots = np.arange(n)
-    kept = (older < hops) & ~view.at(robots, memory.news - frame)[0]
+    kept = (older < cap) & ~source & ~view.at(robots, memory.news - frame)[0]
     hops[kept], news[kept] = older[kept], memory.news[kept]
     return hops, news
