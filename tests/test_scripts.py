@@ -73,3 +73,15 @@ def test_the_benchmarks_tables_are_the_ones_its_results_make():
         command = [sys.executable, f"scripts/{script}", "--check"]
         done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_comparison_table_is_made_from_a_sweeps_rows():
+    command = [sys.executable, "scripts/compare.py", "sweeps/local-vs-optimal.csv"]
+    done = subprocess.run(command, cwd=ROOT, check=True, capture_output=True, text=True)
+    rows = {tuple(line.split(" | ")[:3]): line for line in done.stdout.splitlines()}
+    small = rows["| letter-s.png", "98", "`optimal`"].split(" | ")
+    assert small[3:6] == ["3/3", "51 (50 to 85)", "1.5 (1.5 to 2.6)"]
+    assert rows["| letter-s.png", "1,018", "`local-swap`"].split(" | ")[6:8] == [
+        "3.03 (2.92 to 3.10)",
+        "1.00",
+    ]

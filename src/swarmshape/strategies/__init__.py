@@ -143,6 +143,7 @@ def _load_file(path: Path, spec: str, what: str) -> ModuleType:
 from swarmshape.strategies import (  # noqa: E402,F401  (built-ins)
     concurrent,
     local_swap,
+    mean_shift,
     paper,
     self_assembly,
 )

@@ -1,0 +1,228 @@
+"""`mean-shift`: mean-shift exploration on the lattice, after G. Sun, R. Zhou, Z. Ma, Y. Li,
+R. Gross, Z. Chen and S. Zhao, "Mean-shift exploration in shape assembly of robot swarms",
+Nature Communications 14:3476 (2023), doi:10.1038/s41467-023-39251-5.
+
+Every robot knows the shape and senses only its neighbours within `--sense-radius` cells.
+Each step a robot:
+
+1. works out where it is from the seeds and its neighbours (`skills.localise`); one that cannot
+   yet walks toward those that can;
+2. outside its shape, heads down its grey level, the moves to the shape round the seeds (the
+   paper's *entering* command), with a weight that falls as it comes near (`explore.entering`);
+3. adds the paper's *exploration* command: the mean shift toward the unoccupied shape cells it
+   senses, weighed by a raised-cosine kernel (`explore.mean_shift`);
+4. moves one cell the way that sum points most, among the cells it may enter: a robot inside
+   the shape stays inside it and enters only cells deeper in it than its own, so that the
+   empty cell it leaves lies nearer the robots outside, and one in place enters only a cell
+   they cannot reach (`holes`); a robot outside that can reach an empty shape cell it senses
+   takes only moves that bring it nearer one (`explore.nearer`);
+5. keeps going without braking while the same move is still its choice from the cell it is
+   coming to (cruising).
+
+A robot at rest on a shape cell counts as in place; it moves again only to carry a hole
+beside it out. What differs from the continuous original, and why:
+
+- **No negotiation.** The paper's robots agree on the shape's position and heading by
+  consensus seeded by a fifth of them, the informed robots. Here the seeds are the informed
+  robots: they never move and say their frame cells, and robots take theirs from them or from a
+  neighbour that knows its own, so every robot holds the same frame, with no consensus error.
+- **No repulsion.** The paper keeps robots apart with a repulsive and an aligning command; on
+  the lattice two robots never share a cell and a move has no inertia. A robot is the paper's
+  avoidance distance across, so an occupied cell is the paper's occupied footprint. What
+  damps the paper's robots (their velocity lag, repulsion sliding them round each other)
+  becomes the rule that a robot outside moves only nearer the empty cells it can reach: a
+  straight pull toward their mean, blocked by a robot standing still, flipped it between two
+  cells for ever.
+- **Moves, not velocities.** The summed command picks one of four moves; inside the shape a move
+  toward the unoccupied cells is made only when their mean lies at least `tau` cells that way.
+- **Grey levels round the seeds.** The paper's grey image falls one level a cell toward the
+  shape; here the levels count moves round the seeds, which stand beside the shape and
+  would hold a robot beyond them pushing against them for ever.
+- **Hole transport.** The paper's coverage counts a cell covered within a robot's avoidance
+  distance, so a full shape needs no exact tiling. With a robot per cell, the last empty cells
+  must travel out through the robots in place to those still outside (`holes`); on its own the
+  mean shift leaves them wandering deep inside. The paper's shape is one piece; robots at its
+  full rim follow news of an empty cell elsewhere, so separate pieces form too.
+
+Counts relayed hop by hop stop at twice the shape's cell count (no path through the swarm is
+longer); the kernel reaches one cell past the sensing radius; every other constant is the
+paper's or an option.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import ClassVar
+
+import numpy as np
+
+from swarmshape.core.local import Memory, Program, Schema, Slot
+from swarmshape.core.motion import STEPS
+from swarmshape.core.options import option
+from swarmshape.core.perception import Perception
+from swarmshape.strategies import register, routes
+from swarmshape.strategies.mean_shift import explore, holes
+from swarmshape.strategies.skills import relay, shape
+from swarmshape.strategies.skills.localise import FIXED, find_the_others, localise
+from swarmshape.strategies.skills.view import View
+
+MESSAGE = Schema(
+    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1,
+)  # fmt: skip
+"""What a robot broadcasts: whether it knows where it is, its frame cell, whether it stays on it
+next step, the way it is moving and how far along (see `skills.localise`); an empty rim cell it
+has news of and its hops to the robot that sees it (`holes.open_news`), the count said as
+`relay.said` puts it (0: none)."""
+
+LOST, OUTSIDE, INSIDE, IN_PLACE = range(4)
+
+
+@register
+class MeanShift(Program):
+    name = "mean-shift"
+    description = "entering and mean shift toward unoccupied cells sensed (Sun et al. 2023)"
+    message_size = len(MESSAGE)
+    states = ("lost", "outside the shape", "inside, moving", "in place")
+    shown = "news_hops"
+    memory: ClassVar[dict[str, Slot]] = {
+        "state": Slot(np.int64, LOST),
+        "localised": Slot(bool, False),
+        "frame": Slot(np.int64, 0, 2),
+        "roam": Slot(np.int64, 0),
+        "news": Slot(np.int64, 0, 2),
+        "news_hops": Slot(np.int64, relay.NONE),
+        "in_place": Slot(bool, False),
+    }
+
+    @dataclass(frozen=True)
+    class Options:
+        entering: float = option(
+            10.0, "gain of the entering command (the paper's k1)", at_least=0.0
+        )
+        exploring: float = option(
+            15.0, "gain of the mean shift (the paper's k2, its code's exploration term)",
+            at_least=0.0,
+        )  # fmt: skip
+        band: float = option(
+            3.0,
+            "cells round the shape over which the entering command fades to nothing (the "
+            "paper's grey band, 3.2 to 3.6 robot spacings in its shapes)",
+            at_least=1.0,
+        )
+        tau: float = option(
+            0.5,
+            "cells the mean shift must reach along a move for a robot on its way in to enter a "
+            "cell that robots outside can reach too",
+            at_least=0.0,
+        )
+        roam: int = option(
+            20,
+            "cells a robot that sees nobody localised walks straight on average before it "
+            "turns at random (it turns at a wall too)",
+            at_least=1,
+        )
+
+    def act(
+        self, sense: Perception, memory: Memory, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        said = MESSAGE.read(sense.message)
+        group, blueprint = sense.group, sense.blueprint
+        cap = 2 * sum(len(cells) for cells in blueprint.cells)
+        options = self.options
+        localise(sense, memory, said)
+        localised, frame = memory.localised, memory.frame
+        kin = sense.heard & sense.kin & ~sense.seed
+        view = View(sense, int(sense.radius), np.where(kin, said.heading, 0))
+        offset = explore.base(sense)
+        base = frame + offset
+        inside = blueprint.contains(group, base)
+        window = explore.Window(sense.radius)
+        on_shape = localised & blueprint.contains(group, frame)
+        outside = localised & ~inside
+        shift, free = explore.mean_shift(sense, frame, view, window, offset, outside)
+        sees = free.any(axis=1)
+        memory.news_hops, memory.news = holes.open_news(
+            sense, frame, said, free, window.offsets, view, memory, cap
+        )
+        pull = explore.entering(sense, base, options.band)
+        command = options.exploring * shift + np.where(
+            inside[:, None], 0.0, options.entering * pull
+        )
+        rows = np.flatnonzero(localised & ~inside & ~sees & (memory.news_hops < cap))
+        way, found = routes.waypoints(
+            blueprint, group[rows], base[rows], memory.news[rows], int(sense.radius)
+        )
+        rows = rows[found]
+        command[rows] = options.entering * explore.unit(way[found] - base[rows])
+        rows = np.flatnonzero(outside & sees)
+        toward = np.zeros((len(sense), len(STEPS) - 1), dtype=bool)
+        toward[rows] = explore.nearer(view.taken[rows], offset[rows], free[rows], window.offsets)
+        moves = self._moves(sense, memory, said, view, offset, inside, command, toward)
+        lost = find_the_others(sense, memory, said, view, options.roam, rng)
+        moves = np.where(localised, moves, lost)
+        stays = sense.ready & (moves == 0)
+        # in place until it moves: a move asked for and not made (the cell taken first) leaves
+        # it where it was, and out of place it would go on to carry open holes (`holes`)
+        memory.in_place = on_shape & sense.ready & (stays | memory.in_place)
+        memory.state = np.select(
+            [~localised, memory.in_place, on_shape], [LOST, IN_PLACE, INSIDE], OUTSIDE
+        )
+        heading = np.where(moves > 0, moves, sense.heading)
+        messages = MESSAGE.pack(
+            localised=localised,
+            cell=frame,
+            stays=stays,
+            heading=np.where(stays, 0, heading),
+            progress=np.rint(sense.progress * FIXED),
+            news=memory.news,
+            news_hops=relay.said(memory.news_hops, cap),
+        )
+        return moves, messages
+
+    def _moves(
+        self,
+        sense: Perception,
+        memory: Memory,
+        said: SimpleNamespace,
+        view: View,
+        offset: np.ndarray,
+        inside: np.ndarray,
+        command: np.ndarray,
+        toward: np.ndarray,
+    ) -> np.ndarray:
+        """Each robot's move: the way its command points most among the cells it may enter
+        from its base (see the module's description); under way, on straight ahead or none.
+        A robot outside that can reach an empty shape cell it senses moves only `toward` it
+        ``(n, 4)`` (see `explore.nearer`)."""
+        n = len(sense)
+        ways = STEPS[1:]
+        into = offset[:, None, :] + ways[None]
+        taken = view.at(np.repeat(np.arange(n), len(ways)), into.reshape(-1, 2))[0]
+        cells = (memory.frame[:, None, :] + into).reshape(-1, 2)
+        in_shape = sense.blueprint.contains(np.repeat(sense.group, len(ways)), cells)
+        open_ = ~taken.reshape(n, -1)
+        score = command @ ways.T
+        outward = open_ & np.where(toward.any(axis=1)[:, None], toward, score > 0)
+        groups = np.repeat(sense.group, len(ways))
+        depth = shape.depth(sense.blueprint, groups, cells).reshape(n, -1)
+        here = shape.depth(sense.blueprint, sense.group, memory.frame + offset)
+        deeper = open_ & in_shape.reshape(n, -1) & (depth > here[:, None])
+        # a hole robots coming in can reach is theirs; a robot on its way in takes one too
+        # when the mean shift draws it there
+        reachable = holes.open_holes(sense, memory.frame, said, view, into)
+        drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
+        inward = deeper & (~reachable | drawn)
+        allowed = np.where(inside[:, None], inward, outward)
+        best = 1 + np.argmax(np.where(allowed, score, -np.inf), axis=1)
+        moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)
+        moves[sense.cruising & (moves != sense.heading)] = 0
+        moves[~sense.ready & ~sense.cruising] = 0
+        return moves
+
+    def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
+        return memory.localised.copy(), memory.frame.copy()
+
+    def finished(self, memory: Memory) -> np.ndarray:
+        """Robots at rest on a cell of their shape (one may move again to fill a hole)."""
+        return memory.in_place.copy()

@@ -1,0 +1,185 @@
+"""The paper's two commands that steer a robot toward its shape, on the lattice.
+
+- **Entering** (Sun et al.'s shape-entering command): a robot outside its shape heads down
+  its grey level ``xi``, the fewest moves to the shape round the seeds (the paper's grey image:
+  black on the shape, white beyond a band of grey round it; a robot on a grey cell heads for a
+  lower grey cell), with a weight that falls as it nears the shape: ``k1 * min(xi / band, 1)``.
+  The way to the *nearest* shape cell would do but for the seeds: a robot beyond them, their
+  far side facing the shape, pushed against them for ever.
+- **Exploration** (the mean shift): the weighted mean of the offsets of the unoccupied shape
+  cells a robot senses, ``k2 * sum(psi * o) / sum(psi)``, with the raised-cosine kernel
+  ``psi(z) = (1 + cos(pi z)) / 2`` of the distance over the sensing radius plus one (so that
+  every sensed cell weighs something, as the paper's kernel reaches a little past its sensing
+  radius). A cell is unoccupied if nothing the robot senses stands on it; the robot's own cell
+  is not counted, or a lone hole beside a robot would weigh against its own cell and never
+  draw it.
+
+Both are worked out from a robot's *base*: its cell at rest, or, under way, the cell it is
+coming to, which is where a move it asks for now would start (see `base`).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from scipy import ndimage
+
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Blueprint, Perception
+from swarmshape.core.shape import SEED_CELLS
+from swarmshape.strategies.skills.view import View
+
+FOUR_WAYS = np.zeros((3, 3, 3), dtype=bool)
+FOUR_WAYS[1] = ndimage.generate_binary_structure(2, 1)
+"""Neighbours four ways within one robot's square, never across robots."""
+
+
+def base(sense: Perception) -> np.ndarray:
+    """Each robot's base relative to its own cell ``(n, 2)``: its next cell when it is under
+    way with only that one reserved (it may go on from there), else its own cell."""
+    return np.where(sense.cruising[:, None], STEPS[sense.heading], 0)
+
+
+class Window:
+    """The cells within the sensing radius of a robot's own cell, as offsets ``(k, 2)`` (its
+    own cell among them: under way, it is the cell it leaves) and the kernel that weighs them."""
+
+    def __init__(self, radius: float) -> None:
+        r = int(radius)
+        grid = np.mgrid[-r : r + 1, -r : r + 1].reshape(2, -1).T
+        self.offsets = grid[np.hypot(*grid.T) <= radius]
+        self.radius = radius
+
+    def weights(self, relative: np.ndarray) -> np.ndarray:
+        """The kernel at offsets from the base ``(..., 2)``: 1 at the base, 0 one cell past
+        the sensing radius."""
+        z = np.minimum(np.hypot(relative[..., 0], relative[..., 1]) / (self.radius + 1), 1.0)
+        return (1 + np.cos(np.pi * z)) / 2
+
+
+def mean_shift(
+    sense: Perception,
+    frame: np.ndarray,
+    view: View,
+    window: Window,
+    base: np.ndarray,
+    outside: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per robot, the mean shift from its base toward the unoccupied shape cells it senses
+    ``(n, 2)`` (in cells; zero when it senses none), and which cells of the window those are
+    ``(n, k)`` (its base never among them). A robot `outside` its shape counts only the cells
+    it can walk to through free cells it senses: it cannot pass the robots in place, and
+    cells beyond them come out to it as holes (`holes`)."""
+    n, offsets = len(sense), window.offsets
+    cells = (frame[:, None, :] + offsets[None]).reshape(-1, 2)
+    inside = sense.blueprint.contains(np.repeat(sense.group, len(offsets)), cells)
+    r = view.reach
+    taken = view.taken[:, offsets[:, 0] + r, offsets[:, 1] + r]
+    relative = offsets[None] - base[:, None, :]
+    free = inside.reshape(n, -1) & ~taken & relative.any(axis=2)
+    rows = np.flatnonzero(outside)
+    reach = walkable(view, rows, base[rows])
+    free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
+    weight = np.where(free, window.weights(relative), 0.0)
+    total = weight.sum(axis=1)
+    sees = total > 0
+    shift = np.zeros((n, 2))
+    shift[sees] = np.einsum("nk,nkd->nd", weight[sees], relative[sees]) / total[sees, None]
+    return shift, free
+
+
+def walkable(view: View, robots: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """The cells of each robot's view square it can walk to from its base through free cells,
+    four ways ``(k, side, side)``."""
+    r = view.reach
+    start = np.zeros((len(robots), *view.taken.shape[1:]), dtype=bool)
+    start[np.arange(len(robots)), base[:, 0] + r, base[:, 1] + r] = True
+    return ndimage.binary_propagation(start, FOUR_WAYS, ~view.taken[robots])
+
+
+def nearer(
+    taken: np.ndarray, base: np.ndarray, free: np.ndarray, offsets: np.ndarray
+) -> np.ndarray:
+    """``(n, 4)``: for each robot, the moves from its base that bring it a cell nearer, through
+    cells it does not sense `taken` (its `View` square), to the nearest of its `free` cells
+    ``(n, k)`` at window `offsets`
+    (none when it can reach none). A robot outside its shape takes one of these, so each of its
+    moves brings it nearer an empty cell: straight toward the mean of the cells, round a
+    robot standing still (stalled, say), it would step aside and back for ever."""
+    n, r = len(base), taken.shape[1] // 2
+    passable = ~taken
+    goal = np.zeros_like(passable)
+    goal[:, offsets[:, 0] + r, offsets[:, 1] + r] = free
+    far = np.prod(passable.shape[1:])
+    distance = np.where(goal, 0, far)
+    front, reached, d = goal, goal, 0
+    while front.any():
+        d += 1
+        front = ndimage.binary_dilation(front, FOUR_WAYS) & passable & ~reached
+        distance[front] = d
+        reached = reached | front
+    rows = np.arange(n)
+    here = distance[rows, base[:, 0] + r, base[:, 1] + r]
+    steps = []
+    for step in STEPS[1:]:
+        x, y = (base + step + r).T
+        inside = (x >= 0) & (x <= 2 * r) & (y >= 0) & (y <= 2 * r)
+        there = distance[rows, np.clip(x, 0, 2 * r), np.clip(y, 0, 2 * r)]
+        steps.append(inside & (there < np.minimum(here, far)))
+    return np.stack(steps, axis=1)
+
+
+def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:
+    """Per robot on frame cell `cells`, its entering command ``(n, 2)``: the unit vector along
+    the moves that lower its grey level (one step nearer the shape), times
+    ``min(xi / band, 1)`` (zero on the shape)."""
+    xi = grey(sense.blueprint, sense.group, cells)
+    down = np.zeros((len(cells), 2))
+    for step in STEPS[1:]:
+        lower = grey(sense.blueprint, sense.group, cells + step) < xi
+        down += lower[:, None] * step
+    return unit(down) * np.minimum(xi / band, 1.0)[:, None]
+
+
+def grey(blueprint: Blueprint, groups: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Each frame cell's grey level ``xi``: the fewest moves from it to a cell of its group's
+    shape, round the seeds (0 on the shape; the paper's grey image, one level a cell)."""
+    xi = np.zeros(len(cells), dtype=np.int64)
+    for group, (low, field) in enumerate(_grey_fields(blueprint)):
+        mine = np.flatnonzero(groups == group)
+        at = np.clip(cells[mine] - low, 0, np.array(field.shape) - 1)
+        xi[mine] = field[at[:, 0], at[:, 1]] + np.abs(cells[mine] - low - at).sum(axis=1)
+    return xi
+
+
+@functools.lru_cache(maxsize=4)
+def _grey_fields(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Per group, the low corner of its box (shape and seeds with one free cell round them, so
+    the way round the seeds never leaves it; a cell off it is its clipped cell's level plus the
+    way to it) and the grey level of every cell of the box, found breadth first."""
+    fields = []
+    for shape in blueprint.cells:
+        cells = np.concatenate([shape, SEED_CELLS])
+        low = cells.min(axis=0) - 1
+        size = tuple(cells.max(axis=0) + 2 - low)
+        seeds = np.zeros(size, dtype=bool)
+        seeds[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
+        level = np.full(size, np.prod(size), dtype=np.int64)  # past any way round
+        front = np.zeros(size, dtype=bool)
+        front[shape[:, 0] - low[0], shape[:, 1] - low[1]] = True
+        reached, distance = front.copy(), 0
+        while front.any():
+            level[front] = distance
+            grown = ndimage.binary_dilation(front) & ~reached & ~seeds
+            reached |= grown
+            front, distance = grown, distance + 1
+        fields.append((low, level))
+    return tuple(fields)
+
+
+def unit(vectors: np.ndarray) -> np.ndarray:
+    """Vectors ``(n, 2)`` scaled to length 1 (zero stays zero)."""
+    vectors = vectors.astype(np.float64)
+    length = np.hypot(*vectors.T)[:, None]
+    return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)

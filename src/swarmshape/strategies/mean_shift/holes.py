@@ -1,0 +1,109 @@
+"""Carrying the last empty cells of a full shape out to the robots still outside it.
+
+In the paper a robot covers a disc of cells, so a few cells left empty deep inside a formed
+shape do not matter. On the lattice, with a robot per cell, each one must be filled, by a
+robot that is still outside: an empty cell (a hole) that robots coming in cannot reach must
+travel out through the robots in place. It travels when a robot beside it moves in, leaving
+its own cell empty.
+
+Holes travel outward only: a robot inside its shape moves only into a cell that lies deeper in
+it than its own (`shape.depth`), so the hole it leaves lies shallower, and every cell deeper
+than the rim has a neighbour a step shallower. Each such move deepens the robots inside, so
+no two robots pass a hole back and forth, and a hole reaches the rim, where robots outside
+step in, in at most its depth moves. A robot in place moves into a hole only if robots coming
+in cannot reach it (`open_holes`): carried through the robots in place instead, it moved every
+robot on its way, and a new part drawn beside a formed shape moved robots on its kept cells.
+
+A robot outside that senses no empty cell, beside the shape with its rim full (or at another
+piece of it), follows news of an empty rim cell that robots inside see with nobody outside in
+sight of it (a relay), round the shape (`swarmshape.strategies.routes`).
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from swarmshape.core.local import Memory
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Perception
+from swarmshape.strategies.skills import relay, shape
+from swarmshape.strategies.skills.view import View
+
+
+def open_holes(
+    sense: Perception, frame: np.ndarray, said: SimpleNamespace, view: View, cells: np.ndarray
+) -> np.ndarray:
+    """``(n, k)``: for cells ``(n, k, 2)`` relative to each robot's own, whether robots coming
+    in can reach the cell: beside it lies a cell (not the robot's own) shallower in the shape
+    (outside it is shallowest) that is empty, or holds a robot of the group on its way in (one
+    that speaks, outside the shape or not staying where it is; stalled robots are silent)."""
+    n, k = cells.shape[:2]
+    groups, rows = np.repeat(sense.group, k), np.repeat(np.arange(n), k)
+
+    def depth(rel: np.ndarray) -> np.ndarray:
+        return shape.depth(sense.blueprint, groups, (frame[:, None] + rel).reshape(-1, 2))
+
+    here = depth(cells)
+    # per entry, and False for none (a `who` of -1 picks the last)
+    speaks = np.append(sense.heard & sense.kin & ~sense.seed, False)
+    moving = np.append(said.stays == 0, False)
+    found = np.zeros(n * k, dtype=bool)
+    for step in STEPS[1:]:
+        beside = cells + step
+        taken, who = view.at(rows, beside.reshape(-1, 2))
+        there = depth(beside)
+        coming_in = speaks[who] & ((there == 0) | moving[who])
+        way_in = (~taken | coming_in) & (beside != 0).any(axis=2).ravel()
+        found |= way_in & (there < here)
+    return found.reshape(n, k)
+
+
+def open_news(
+    sense: Perception,
+    frame: np.ndarray,
+    said: SimpleNamespace,
+    free: np.ndarray,
+    offsets: np.ndarray,
+    view: View,
+    memory: Memory,
+    cap: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each robot's hops to a robot that sees a cell no robot will fill unless one comes for
+    it, and that cell: an empty rim cell (beside the outside, `shape.depth` 1) with nobody
+    outside beside it, who could step into it (no robot inside moves to a cell as shallow).
+    `free` ``(n, k)`` marks the empty shape cells each robot senses at window `offsets`. News
+    of a cell a robot sees taken is stale, and it does not pass it on. A robot keeps the news it
+    has (its `memory`), a hop older each step, until it sees the cell taken or the count runs
+    out, whatever nearer news it hears: one following news round the seeds walked out of
+    hearing of the robots that passed it on, lost it, turned back, heard it again, and so on
+    for ever; and six robots below the S, hearing of two cells by about as many hops, turned
+    from one to the other as they moved, for good (the S at 14 cells, seeds 0-11)."""
+    n, k = free.shape
+    groups = np.repeat(sense.group, k)
+    cells = (frame[:, None, :] + offsets[None]).reshape(-1, 2)
+    rim = shape.depth(sense.blueprint, groups, cells).reshape(n, k) == 1
+    r = view.reach
+    alone = np.ones((n, k), dtype=bool)
+    for step in STEPS[1:]:
+        beside = offsets + step
+        seen = (np.abs(beside) <= r).all(axis=1)
+        x, y = np.clip(beside + r, 0, 2 * r).T
+        out = shape.depth(sense.blueprint, groups, (cells + step)).reshape(n, k) == 0
+        alone &= ~(view.taken[:, x, y] & seen[None] & out)
+    wanted = free & rim & alone
+    distance = np.abs(offsets).sum(axis=1)
+    nearest = np.argmin(np.where(wanted, distance[None], np.iinfo(np.int64).max), axis=1)
+    found = frame + offsets[nearest]
+    source = sense.blueprint.contains(sense.group, frame) & wanted.any(axis=1)
+    stale = view.at(sense.owner, said.news - frame[sense.owner])[0]
+    fresh = sense.heard & sense.kin & ~sense.seed & (said.localised == 1) & ~stale
+    hops, news = relay.relay(
+        sense, fresh, relay.heard(said.news_hops), said.news, source, found, cap
+    )
+    older = np.minimum(memory.news_hops, cap - 1) + 1
+    robots = np.arange(n)
+    kept = (older < cap) & ~source & ~view.at(robots, memory.news - frame)[0]
+    hops[kept], news[kept] = older[kept], memory.news[kept]
+    return hops, news

@@ -1,0 +1,72 @@
+"""News from beyond a robot's sensing range, passed on hop by hop.
+
+A robot that sees something (an open cell of its shape, a seed) tells it at 0 hops; every
+other robot takes the least count it hears, plus one, with what that neighbour told (a frame
+cell, say). This is distributed Bellman-Ford: counts settle to the hops to the nearest source
+one hop a step, and when a source goes away the counts near it rise, one a step, until they
+reach the next source, or `cap` where there is none.
+
+A count is broadcast as one more than itself, so that 0 means "no count": a robot's message
+before it first speaks is all zeros (`said`, `heard`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmshape.core.perception import Perception
+
+NONE = 1 << 30
+"""A count never heard: more than any cap."""
+
+
+def said(count: np.ndarray, cap: int) -> np.ndarray:
+    """A count as broadcast: one more than itself, 0 for none (`cap` or more)."""
+    return np.where(count < cap, count + 1, 0)
+
+
+def heard(field: np.ndarray) -> np.ndarray:
+    """A broadcast count as a count, `NONE` where none was said."""
+    return np.where(field > 0, field - 1, NONE)
+
+
+def relay(
+    sense: Perception,
+    heard: np.ndarray,
+    hops: np.ndarray,
+    told: np.ndarray,
+    source: np.ndarray,
+    found: np.ndarray,
+    cap: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per robot, its hops to the nearest source and what that source told.
+
+    Per entry: `heard` (the neighbour's message came through and is news to take), its `hops`
+    and what it `told` ``(m, k)``. Per robot: whether it is a `source` itself and what it
+    `found` ``(n, k)``. Counts stop at `cap` (no news)."""
+    best = best_per_robot(len(sense), sense.owner, hops, heard & (hops < cap))
+    has = best >= 0
+    count = np.full(len(sense), cap, dtype=np.int64)
+    count[has] = np.minimum(hops[best[has]] + 1, cap)
+    news = np.zeros_like(found)
+    news[has] = told[best[has]]
+    count[source] = 0
+    news[source] = found[source]
+    return count, news
+
+
+def best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
+    the first, in reach order: the nearest), or -1. Entries come by robot (`owner` never
+    falls), so one pass finds each robot's least key and its first entry with it."""
+    best = np.full(n, -1, dtype=np.int64)
+    rows = np.flatnonzero(mask)
+    if not len(rows):
+        return best
+    who, value = owner[rows], key[rows]
+    starts = np.flatnonzero(np.r_[True, who[1:] != who[:-1]])
+    least = np.minimum.reduceat(value, starts)
+    first = rows[value == np.repeat(least, np.diff(np.r_[starts, len(rows)]))]
+    firsts = first[np.r_[True, owner[first][1:] != owner[first][:-1]]]
+    best[owner[firsts]] = firsts
+    return best

@@ -1,0 +1,55 @@
+"""What a robot senses around it, cell by cell.
+
+Offsets are sensed from where the robot is now, which under way lies between two cells; adding
+its progress along its heading makes them relative to the cell it is leaving, its own cell.
+Rounded, they say which cell each neighbour is on (noise of up to half a cell is absorbed).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Perception
+
+
+class View:
+    """Per robot, the square of cells within `reach` round its own cell: which hold something
+    it senses (`taken`), and the entry (index into the perception's arrays) of the neighbour
+    on each (`who`, -1 where none). A neighbour known to be under way (`coming`: its heading
+    per entry, 0 if at rest or unknown) takes the cell it is coming to as well."""
+
+    def __init__(self, sense: Perception, reach: int, coming: np.ndarray | None = None) -> None:
+        n, r = len(sense), reach
+        self.reach = r
+        own = sense.progress[:, None] * STEPS[sense.heading]
+        self.cells = np.rint(sense.offset + own[sense.owner]).astype(np.int64)
+        """Each entry's cell relative to its robot's own cell."""
+        side = 2 * r + 1
+        self.taken = np.zeros((n, side, side), dtype=bool)
+        self.who = np.full((n, side, side), -1, dtype=np.int64)
+        entries = np.arange(len(sense.owner))
+        near = (np.abs(self.cells) <= r).all(axis=1)
+        self._mark(sense.owner[near], self.cells[near], entries[near])
+        if coming is not None:
+            going = np.flatnonzero(coming > 0)
+            ahead = self.cells[going] + STEPS[coming[going]]
+            near = (np.abs(ahead) <= r).all(axis=1)
+            self._mark(sense.owner[going[near]], ahead[near], going[near])
+
+    def _mark(self, robots: np.ndarray, cells: np.ndarray, entries: np.ndarray) -> None:
+        r = self.reach
+        self.taken[robots, cells[:, 0] + r, cells[:, 1] + r] = True
+        self.who[robots, cells[:, 0] + r, cells[:, 1] + r] = entries
+
+    def at(self, robots: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whether each robot senses something on a cell relative to its own, and the entry of
+        the neighbour there (-1: none). Cells beyond its window are free as far as it knows."""
+        r = self.reach
+        inside = (np.abs(cells) <= r).all(axis=1)
+        taken = np.zeros(len(robots), dtype=bool)
+        who = np.full(len(robots), -1, dtype=np.int64)
+        x, y = cells[inside, 0] + r, cells[inside, 1] + r
+        taken[inside] = self.taken[robots[inside], x, y]
+        who[inside] = self.who[robots[inside], x, y]
+        return taken, who
