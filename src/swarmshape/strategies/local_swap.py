@@ -23,6 +23,7 @@ from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
 from swarmshape.core.perception import Blueprint, Perception, box_lookup
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
+from swarmshape.strategies.skills.relay import best_per_robot
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
@@ -382,7 +383,7 @@ def _held_twice(sense: Perception, rested: np.ndarray) -> tuple[np.ndarray, np.n
     goal = msg[:, GX : GY + 1]
     away = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1) & (msg[:, HAS] == 1)
     away &= ~_same(msg[:, X : Y + 1], goal) & _among(_key(me, goal), rested)
-    first = _best_per_robot(len(sense), me, np.zeros(len(me)), away)
+    first = best_per_robot(len(sense), me, np.zeros(len(me)), away)
     cell = np.zeros((len(sense), 2), dtype=np.int64)
     cell[first >= 0] = goal[first[first >= 0]]
     return first >= 0, cell
@@ -466,7 +467,7 @@ def _relay_open(
     news &= memory.localised[me]
     news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
     known = _same(msg[:, OX : OY + 1], memory.heard[me])
-    best = _best_per_robot(len(sense), me, msg[:, OPEN_HOPS] - LOYALTY * known, news)
+    best = best_per_robot(len(sense), me, msg[:, OPEN_HOPS] - LOYALTY * known, news)
     told = (best >= 0) & ~seen
     cell, hops = sight.copy(), np.where(seen, 0, FAR)
     cell[told] = msg[best[told], OX : OY + 1]
@@ -548,7 +549,7 @@ def _relay_seekers(
     me, msg = sense.owner, sense.message
     news = sense.heard & sense.kin & ~sense.seed & (msg[:, SEEKER_HOPS] < CALL_REACH)
     news &= memory.localised[me]
-    best = _best_per_robot(len(sense), me, msg[:, SEEKER_HOPS], news)
+    best = best_per_robot(len(sense), me, msg[:, SEEKER_HOPS], news)
     told = (best >= 0) & ~calling
     cell, hops = memory.frame.copy(), np.where(calling, 0, FAR)
     cell[told] = msg[best[told], SX : SY + 1]
@@ -631,7 +632,7 @@ def localise(sense: Perception, memory: Memory) -> None:
     reference = np.where(sense.seed[:, None], sense.seed_frame, sense.message[:, X : Y + 1])
     usable = whole & (robot | sense.heard & sense.kin & sense.seed)
     usable &= ~memory.localised[sense.owner] & sense.ready[sense.owner]
-    first = _best_per_robot(len(sense), sense.owner, np.zeros(len(usable)), usable)
+    first = best_per_robot(len(sense), sense.owner, np.zeros(len(usable)), usable)
     found = first >= 0
     memory.frame[found] = (reference - cells)[first[found]]
     memory.localised |= found
@@ -646,7 +647,7 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
     )
     heard_hops = np.where(sense.heard & sense.kin, heard_hops, FAR)
     heard_hops[~sense.seed & (sense.message[:, LOCALISED] == 0) & (heard_hops == 0)] = FAR
-    best = _best_per_robot(len(sense), sense.owner, heard_hops, np.ones(len(heard_hops), bool))
+    best = best_per_robot(len(sense), sense.owner, heard_hops, np.ones(len(heard_hops), bool))
     found = best >= 0
     nearest = np.full(len(sense), FAR, dtype=np.int64)
     nearest[found] = heard_hops[best[found]]
@@ -662,24 +663,6 @@ def _hops(sense: Perception, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
     way = np.where(along_x, np.where(offset[:, 0] > 0, 1, 2), np.where(offset[:, 1] > 0, 3, 4))
     closer = found & (nearest < FAR) & (np.abs(offset).max(axis=1) >= 1.5)
     return hops, np.where(closer, way, 0)
-
-
-def _best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
-    the first, in reach order), or -1. Entries come by robot (`owner` never falls), so one
-    pass finds each robot's least key and its first entry with it; sorting every entry by
-    robot and key took twice as long."""
-    best = np.full(n, -1, dtype=np.int64)
-    rows = np.flatnonzero(mask)
-    if not len(rows):
-        return best
-    who, value = owner[rows], key[rows]
-    starts = np.flatnonzero(np.r_[True, who[1:] != who[:-1]])
-    least = np.minimum.reduceat(value, starts)
-    first = rows[value == np.repeat(least, np.diff(np.r_[starts, len(rows)]))]
-    firsts = first[np.r_[True, owner[first][1:] != owner[first][:-1]]]
-    best[owner[firsts]] = firsts
-    return best
 
 
 @functools.lru_cache(maxsize=1)
@@ -844,7 +827,7 @@ def _choose_partner(
     me, msg = sense.owner, sense.message
     talk = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
     talk &= memory.localised[me] & sense.ready[me]
-    rows = np.flatnonzero(talk)  # in reach order, so `_best_per_robot` breaks ties as before
+    rows = np.flatnonzero(talk)  # in reach order, so `best_per_robot` breaks ties as before
     me, msg = me[rows], np.take(msg.T, rows, axis=1).T  # field by field, as perceived
     still = msg[:, STAYS] == 1
     my_has, their_has = memory.has_goal[me], msg[:, HAS] == 1
@@ -882,7 +865,7 @@ def _choose_partner(
     held |= settled & their_has & _among(_key(me, their_cell), silent)
     score = np.where(~same & ~again & ~held, score, 0)
     number = msg[:, NUMBER]
-    best = _best_per_robot(len(sense), me, -score * (number.max(initial=0) + 1) + number, score > 0)
+    best = best_per_robot(len(sense), me, -score * (number.max(initial=0) + 1) + number, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
     wants[best >= 0] = msg[best[best >= 0], NUMBER]
     return wants

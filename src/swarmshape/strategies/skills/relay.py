@@ -58,7 +58,8 @@ def relay(
 def best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
     the first, in reach order: the nearest), or -1. Entries come by robot (`owner` never
-    falls), so one pass finds each robot's least key and its first entry with it."""
+    falls), so one pass finds each robot's least key and its first entry with it; sorting
+    every entry by robot and key took twice as long."""
     best = np.full(n, -1, dtype=np.int64)
     rows = np.flatnonzero(mask)
     if not len(rows):
