@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from swarmshape.check import InvariantWatch
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import State
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.io.bitmap import load_grid
 from swarmshape.io.scenario import load_scenario
@@ -189,6 +189,23 @@ def test_the_papers_movers_of_two_groups_meeting_head_on_pass(g0, g1, agents, se
     ]
     swarm = Swarm(build_world(specs), create("paper"), seed)
     run(swarm, max_steps=5000)
+    assert swarm.complete and swarm.overlap_total == 0
+
+
+def test_the_papers_mover_behind_a_wanderer_walled_in_by_its_shape_passes_its_target_on():
+    """`scripts/faults.py --heal` found it (random2:7, seed 9): after the loss, a wanderer of
+    the first group sat in a dead end of the second group's shape, its last open cell beyond it
+    and the mover behind it its only way out; 400,000 steps went by. The mover now passes its
+    target to a settled robot of its group beside it, nearer the cell."""
+    specs = [
+        GroupSpec("g0", Shape(grid_from("..##. #..## ###.# ....#")), (1, 2, 3), 16),
+        GroupSpec("g1", Shape(grid_from("###.# ...## ##.## #.##.")), (3, 2, 1), 19),
+    ]
+    swarm = Swarm(build_world(specs), create("paper"), 9, Params(on_loss="rescale"))
+    formed(swarm)
+    present = np.flatnonzero(swarm.present)
+    swarm.fail(np.sort(swarm.rng.choice(present, 7, replace=False)), "remove", label="random")
+    run(swarm, max_steps=swarm.step_count + 3000)
     assert swarm.complete and swarm.overlap_total == 0
 
 

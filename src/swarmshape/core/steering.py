@@ -511,8 +511,10 @@ class Steering:
         Idle robots (waiting or wandering, at rest) step aside. One that cannot, caught inside
         its own shape or in a pocket of it with no free cell to step to, takes the mover's
         target instead (`_hand_over`): under every motion, or a wanderer left in a hole of a
-        shape re-formed smaller blocks the paper's one mover for ever. Under
-        `Motion.SWAP` a ring of
+        shape re-formed smaller blocks the paper's one mover for ever. One of another group
+        with no free cell, waited on for `patience` steps, cannot take the target: the mover
+        passes it to a settled robot of its own group beside it, nearer the target
+        (`_pass_to_settled_nearer`). Under `Motion.SWAP` a ring of
         resting movers each waiting for the next passes its targets round; two movers trade
         targets when that shortens their trips (`_trips`); a settled robot of the same group
         swaps targets with the mover; no robot takes part in two of these in one step; and a
@@ -526,11 +528,17 @@ class Steering:
         at_rest = swarm.ahead[robot] == 0
         idle = is_robot & at_rest & ((state == WAITING) | (state == WANDERING))
         same_group = is_robot & (swarm.group[robot] == swarm.group[blocked])
-        trapped = self._in_own_shape(robot) | ~self._free_steps(robot, own_shape_too=True).any(1)
-        caught = idle & same_group & trapped
-        if caught.any():
+        boxed = ~self._free_steps(robot, own_shape_too=True).any(1)
+        caught = idle & same_group & (self._in_own_shape(robot) | boxed)
+        # a wanderer of one group in a dead end of another's shape, the mover behind it its only
+        # way out, and nothing else leading to the open cell: two random shapes under `paper`
+        walled = idle & ~same_group & boxed
+        walled &= self.blocked[blocked] >= swarm.params.patience
+        if caught.any() or walled.any():
             self._hand_over(*one_per_blocker(blocked[caught], robot[caught]))
-            return self._make_way(blocked[~caught], blocker[~caught])
+            passed_to = self._pass_to_settled_nearer(blocked[walled])
+            rest = ~caught & ~walled & ~np.isin(blocker, passed_to)
+            return self._make_way(blocked[rest], blocker[rest])
         if self.motion is Motion.ROUTE:
             return blocker[idle]
         settled = is_robot & (state == SETTLED)
@@ -553,6 +561,27 @@ class Steering:
         fixed = (blocker == SEED) | (blocker == WALL) | (settled & ~same_group) | stalled
         self.routed[blocked[fixed]] = True
         return blocker[idle]
+
+    def _pass_to_settled_nearer(self, movers: np.ndarray) -> np.ndarray:
+        """Each mover swaps targets with the settled robot of its group beside it that is
+        nearest the mover's target, if one is nearer than the mover; return those robots. The
+        settled robot steps on toward the target and the mover into its cell; as with a
+        hand-over, the robot heading for the target is nearer it after each pass, so passes
+        cannot go on for ever."""
+        swarm, lattice = self.swarm, self.swarm.lattice
+        here = lattice.key(rows(swarm.cell, movers))
+        holder = lattice.holder[here[:, None] + lattice.offsets[1:]]
+        beside = np.maximum(holder, 0)
+        goal = rows(swarm.world.targets, self.target[movers])
+        gap = np.abs(swarm.cell[beside] - goal[:, None]).sum(-1)
+        nearer = gap < np.abs(rows(swarm.cell, movers) - goal).sum(-1)[:, None]
+        nearer &= (holder >= 0) & (swarm.state[beside] == SETTLED)
+        nearer &= swarm.group[beside] == swarm.group[movers][:, None]
+        best = np.argmin(np.where(nearer, gap, np.iinfo(np.int64).max), axis=1)
+        has = nearer.any(axis=1)
+        movers, settled = one_per_blocker(movers[has], beside[has, best[has]])
+        self._swap_with_settled(movers, settled)
+        return settled
 
     def _pass_targets(self, givers: np.ndarray, receivers: np.ndarray) -> None:
         """Receivers take over the givers' targets, all at once, and plan afresh. Whether the
