@@ -247,15 +247,17 @@ FLOAT_NOISE = ["0", "-0.5", "2", "nan", "-nan", "inf", "1e309", "1e-320", "", "a
 SIZE_NOISE = ["0x0", "1x1", "10x-3", "99999x99999", "25000001x1", "axb", "x", "", "10X10",
               "10x10x10", " 40 x 30 ", "\u0661\u0660x\u0661\u0660", "\uff11\uff10x\uff11\uff10",
               "4e1x30", "0x30"]  # fmt: skip
-STRATEGIES = ["optimal", "greedy", "random", "paper", "mine.py:Mine", "nope", "", "a:", ":", ":B",
+STRATEGIES = ["optimal", "greedy", "random", "paper", "local-swap", "self-assembly", "mean-shift",
+              "mine.py:Mine", "nope", "", "a:", ":", ":B",
               ".x:Y", "os:path", "swarmshape.core.motion:Limits", "swarmshape:Strategy",
               "missing.py:X", "notes.txt:X", "sub:X", "mine.py:", "mine.py:Optimal",
               "x" * 300, "x" * 300 + ".py:X", *HOSTILE_CLASSES]  # fmt: skip
 ORDERS = ["outward", "left-to-right", "random", "", "inward", "OUTWARD"]
 OPTIONS = [f"order={order}" for order in ORDERS] + [
     "startup=3", "alone=-1", "alone=1e3", "patience=²", "nope=1", "=", "order", "loss_memory=nan",
+    "band=1", "band=0.5", "tau=0", "roam=1", "roam=1e9", "entering=inf", "exploring=-1",
 ]  # fmt: skip
-"""``--set`` values: the paper's orders and self-assembly's numbers, some bad."""
+"""``--set`` values: the paper's orders, self-assembly's and mean-shift's numbers, some bad."""
 
 
 def whole(pick: Pick, valid: Sequence[str]) -> str:

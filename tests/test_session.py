@@ -15,6 +15,7 @@ from PIL import Image
 
 from swarmshape.cli import main
 from swarmshape.errors import InputError, Terminated
+from swarmshape.io import files
 from swarmshape.io.bitmap import load_grid
 from swarmshape.io.scenario import read_start_cells
 from swarmshape.session import SHADES, ended_by_signals
@@ -280,3 +281,19 @@ def test_a_signal_that_a_library_turns_into_its_own_error_still_ends_the_run():
         except Terminated:
             raise TypeError("not a file object") from None  # as pygame's reader does
     assert ended.value.code == 128 + signal.SIGTERM
+
+
+def test_a_signal_as_an_output_makes_its_temporary_leaves_nothing_behind(tmp_path, monkeypatch):
+    """The fuzz (seed 40) sent SIGTERM just as a run made its frames' temporary folder, before
+    the run had it to discard: the folder stayed. Whatever temporaries a command made and did
+    not rename go as it ends."""
+    made = files.TemporaryFolder.__init__
+
+    def struck(self: files.TemporaryFolder, target: Path) -> None:
+        made(self, target)
+        raise Terminated(128 + signal.SIGTERM)
+
+    monkeypatch.setattr(files.TemporaryFolder, "__init__", struck)
+    with pytest.raises(Terminated):
+        main([HORSESHOE, "--headless", "--max-steps", "5", "--frames", str(tmp_path / "out")])
+    assert list(tmp_path.iterdir()) == []

@@ -31,6 +31,7 @@ from swarmshape.config import (
 from swarmshape.core.faults import FaultEvent, parse_event, parse_region
 from swarmshape.core.options import FLAG, PLUGIN_KINDS, Spec, plain, specs
 from swarmshape.errors import InputError, SettingError, SettingWarning
+from swarmshape.io.files import remove_temporaries
 from swarmshape.runs import resume
 from swarmshape.session import Outputs, Session, preview, preview_text
 
@@ -359,6 +360,8 @@ def main(argv: list[str] | None = None) -> int:
     except Exception:  # a bug of ours: a short word here, the whole story in a log
         print(f"swarmshape: internal error, please report it; {_crash_log()}", file=sys.stderr)
         return 1
+    finally:
+        remove_temporaries()
 
 
 def _unrecognised(unknown: list[str]) -> str:
