@@ -78,6 +78,8 @@ BAD = {
     "steps not finite": (lambda r: changed(r, "steps", "nan"), "row 1: steps is not a number"),
     "bad JSON curve": (lambda r: changed(r, "coverage_curve", "[0.1,"),
                        "bad.csv: row 1: coverage_curve is not a list of numbers"),
+    "curve nested too deep": (lambda r: changed(r, "coverage_curve", "[" * 100_000),
+                              "row 1: coverage_curve is not a list of numbers"),
     "curve of text": (lambda r: changed(r, "coverage_curve", '["a"]'),
                       "row 1: coverage_curve is not a list of numbers"),
     "curve too short": (lambda r: changed(r, "coverage_curve", "[0.5]"),

@@ -128,7 +128,7 @@ def _run(row: dict[str, str]) -> Run:
     steps_run = _whole(row, "steps_run", 0)
     try:
         coverage = json.loads(row["coverage_curve"])
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError):  # deep nesting exhausts the parser's stack (the fuzz)
         coverage = None
     numbers = isinstance(coverage, list) and all(map(_finite, coverage))
     if not numbers or not coverage:
