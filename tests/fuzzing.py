@@ -1477,7 +1477,7 @@ class Named:
 
     def _inputs(self, folder: Path, args: Any) -> None:
         """Note the files a run reads (see `inputs`)."""
-        from swarmshape.session import scenario_images
+        from swarmshape.runs import scenario_images
 
         read = [args.start if isinstance(args.start, Path) else None, args.path]
         if args.load_state is not None and args.load_state != args.save_state:
@@ -1626,9 +1626,15 @@ def problems(
         if bad:
             found.append(f"wrote an output that does not read back: {bad}")
     if named.command == "sweep" and status == 0:
-        foreign = named.foreign_row()
-        if foreign:
-            found.append(f"kept a row of a run the sweep does not have: {foreign[:80]}")
+        from swarmshape.errors import InputError
+
+        try:
+            foreign = named.foreign_row()
+        except InputError as error:  # it wrote over what it read (the harness crashed on it)
+            found.append(f"left its sweep unreadable: {error}")
+        else:
+            if foreign:
+                found.append(f"kept a row of a run the sweep does not have: {foreign[:80]}")
     lost = named.lost_rows()
     if lost:
         found.append(f"{named.keeps_rows}: lost the line {lost!r} without --force")

@@ -14,6 +14,7 @@ the end; the loop is `Runner`, which the window drives one step at a time.
 from __future__ import annotations
 
 import dataclasses
+import tomllib
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -85,6 +86,38 @@ def load_world(config: RunConfig, picture: Picture | None = None) -> World:
                 stacklevel=2,
             )
     return world
+
+
+def files_read(config: RunConfig) -> dict[Path, str]:
+    """Every file a run of `config` reads, and what it is to the run (for messages): no output
+    may replace one, even with --force."""
+    shape = config.shape_path
+    if shape.suffix.lower() == ".toml":
+        found = {shape: "its scenario"}
+        found |= {image: "an image of its scenario" for image in scenario_images(shape)}
+    else:
+        found = {shape: "its image"}
+    if isinstance(config.start, Path):
+        found[config.start] = "its start cells"
+    return found | strategy_file(config.strategy)
+
+
+def strategy_file(strategy: str | None) -> dict[Path, str]:
+    """The file of a strategy named as ``FILE.py:CLASS``, as `files_read` gives it."""
+    module = (strategy or "").rpartition(":")[0]
+    return {Path(module): "its strategy's code"} if module.endswith(".py") else {}
+
+
+def scenario_images(path: Path) -> list[Path]:
+    """The images a scenario file names (those it names as text; the scenario's reader checks
+    the rest, and has already read this file's settings)."""
+    try:
+        groups = tomllib.loads(path.read_text(encoding="utf-8")).get("groups")
+    except (OSError, ValueError, RecursionError):
+        return []
+    tables = groups if isinstance(groups, list) else []
+    shapes = [table.get("shape") for table in tables if isinstance(table, dict)]
+    return [path.parent / shape for shape in shapes if isinstance(shape, str)]
 
 
 def build(config: RunConfig) -> Swarm:

@@ -14,7 +14,6 @@ import os
 import signal
 import sys
 import threading
-import tomllib
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,7 +37,17 @@ from swarmshape.experiments.trace import Trace
 from swarmshape.io.bitmap import Picture, read_picture
 from swarmshape.io.files import check_output, distinct_outputs, identity, write_text
 from swarmshape.io.scenario import PALETTE, parse_colour
-from swarmshape.runs import Observer, Runner, load_world, resume, save, start_cells, start_swarm
+from swarmshape.runs import (
+    Observer,
+    Runner,
+    files_read,
+    load_world,
+    resume,
+    save,
+    start_cells,
+    start_swarm,
+    strategy_file,
+)
 
 OUTPUT_OPTIONS = ("metrics", "record", "frames", "trace", "save_state", "positions")
 
@@ -72,8 +81,6 @@ class Outputs:
         named = [(f"--{o.replace('_', '-')}", getattr(self, o)) for o in OUTPUT_OPTIONS]
         named = [(flag, path) for flag, path in named if path is not None]
         distinct_outputs(named)
-        read = {identity(path): what for path, what in (inputs or {}).items()}
-        read.pop(None, None)
         for flag, path in named:
             continues = flag == "--save-state" and resumed is not None and _same(path, resumed)
             check_output(
@@ -81,7 +88,11 @@ class Outputs:
                 flag,
                 may_replace=self.force or continues,
                 folder=flag == "--frames",
-                inputs={k: v for k, v in read.items() if not continues or k != identity(resumed)},
+                inputs={
+                    file: what
+                    for file, what in (inputs or {}).items()
+                    if not continues or not _same(file, resumed)
+                },
             )
 
     @contextlib.contextmanager
@@ -180,20 +191,8 @@ class Session:
     def _inputs(self) -> dict[Path, str]:
         """Every file the run reads, and what it is to the run (for messages)."""
         if self.resume is not None:
-            found, code = {self.resume: "the state this run resumes"}, self.strategy
-        else:
-            shape, code = self.config.shape_path, self.config.strategy
-            if shape.suffix.lower() == ".toml":
-                found = {shape: "its scenario"}
-                found |= {image: "an image of its scenario" for image in scenario_images(shape)}
-            else:
-                found = {shape: "its image"}
-            if isinstance(self.config.start, Path):
-                found[self.config.start] = "its start cells"
-        module = (code or "").rpartition(":")[0]
-        if module.endswith(".py"):
-            found[Path(module)] = "its strategy's code"
-        return found
+            return {self.resume: "the state this run resumes"} | strategy_file(self.strategy)
+        return files_read(self.config)
 
     def _prepare(self) -> tuple[RunConfig, World, Callable[[World], Swarm]]:
         """The run's description, its first world, and how the run (and the window's restart)
@@ -407,15 +406,3 @@ def _count(number: int, thing: str) -> str:
 
 def _same(path: Path, other: Path) -> bool:
     return path.resolve() == other.resolve() or identity(path) == identity(other) is not None
-
-
-def scenario_images(path: Path) -> list[Path]:
-    """The images a scenario file names (those it names as text; the scenario's reader checks
-    the rest, and has already read this file's settings)."""
-    try:
-        groups = tomllib.loads(path.read_text(encoding="utf-8")).get("groups")
-    except (OSError, ValueError, RecursionError):
-        return []
-    tables = groups if isinstance(groups, list) else []
-    shapes = [table.get("shape") for table in tables if isinstance(table, dict)]
-    return [path.parent / shape for shape in shapes if isinstance(shape, str)]

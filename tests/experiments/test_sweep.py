@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import shutil
+
 import pytest
 from PIL import Image
 
@@ -117,3 +119,28 @@ def test_a_sweep_varies_faults_and_reports_the_slowest_recovery(tmp_path):
     assert {row["config.fail"] for row in rows} == {"0.2@40", "3@40"}
     assert all(int(row["robots_lost"]) >= 3 and row["overlaps"] == "0" for row in rows)
     assert all(row["recovery_steps"] != "" for row in rows)
+
+
+@pytest.mark.parametrize(
+    ("out", "what"),
+    [
+        ("sweep.toml", "the sweep file"),
+        ("shape.png", "its image"),
+        ("two.toml", "its scenario"),
+        ("dot.png", "an image of its scenario"),
+    ],
+)
+def test_a_sweep_never_writes_its_results_over_a_file_it_reads(tmp_path, capsys, out, what):
+    """The fuzz (seed 40) named a sweep's own shape as its --out, with --force, and the sweep
+    wrote its rows over the picture; the sweep file itself went the same way."""
+    shutil.copy(SHAPES / "line.png", tmp_path / "shape.png")
+    shutil.copy(SHAPES / "line.png", tmp_path / "dot.png")
+    (tmp_path / "two.toml").write_text('[[groups]]\nshape = "dot.png"\n')
+    (tmp_path / "sweep.toml").write_text(
+        'shapes = ["shape.png", "two.toml"]\nstrategies = ["optimal"]\nmax_steps = 5\n'
+    )
+    before = {path.name: path.read_bytes() for path in tmp_path.iterdir()}
+    args = ["sweep", str(tmp_path / "sweep.toml"), "--workers", "1", "--force"]
+    assert main([*args, "--out", str(tmp_path / out)]) == 2
+    assert f"--out would replace {what}" in capsys.readouterr().err
+    assert {path.name: path.read_bytes() for path in tmp_path.iterdir()} == before

@@ -14,7 +14,7 @@ import contextlib
 import csv
 import json
 import os
-from collections.abc import Collection, Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from io import StringIO
 from pathlib import Path
@@ -40,15 +40,17 @@ def open_results(
     *,
     runs: Collection[str] | None = None,
     force: bool = False,
+    inputs: Mapping[Path, str] | None = None,
 ) -> Iterator[Results]:
     """`path` held for one sweep whose rows have the `settings` columns (``config.NAME``), and,
     if given, the `runs` keys (``run``).
 
     Checked before any run: the folder can be written, no other sweep holds the file, and the
     file is new, empty or a results file of the same settings whose rows are all whole and
-    among `runs`; with `force` any other file is started over (the first row replaces it)."""
+    among `runs`; with `force` any other file is started over (the first row replaces it),
+    but never one of the sweep's `inputs` (path: what it is to the sweep)."""
     path = Path(path)
-    check_output(path, "--out", may_replace=True)
+    check_output(path, "--out", may_replace=True, inputs=inputs)
     with _lock(path):
         results = Results(path)
         try:

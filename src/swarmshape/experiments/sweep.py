@@ -25,7 +25,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +41,7 @@ from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
 from swarmshape.io.files import read_toml
-from swarmshape.runs import Observer, build, load_world, registered_strategy, run
+from swarmshape.runs import Observer, build, files_read, load_world, registered_strategy, run
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
 OWN_KEYS = {
@@ -258,6 +258,16 @@ def _number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
+def files_read_by(runs: Collection[dict[str, Any]], base: Path) -> dict[Path, str]:
+    """Every file the runs read (shape paths relative to `base`): a sweep's results file may
+    replace none of them, even with --force. The fuzz named a sweep's own shape as its --out,
+    with --force, and the sweep wrote its rows over the picture."""
+    found: dict[Path, str] = {}
+    for shape, strategy in {(config["shape"], config["strategy"]) for config in runs}:
+        found |= files_read(configure(base / shape, strategy=strategy))
+    return found
+
+
 def run_key(config: dict[str, Any]) -> str:
     """A stable name for one run, to skip it when a sweep resumes."""
     return json.dumps(config, sort_keys=True)
@@ -325,6 +335,7 @@ def run_sweep_file(
             workers=workers,
             force=force,
             progress=lambda done, total: bar.show(done / total, f"{done}/{total} runs", now=True),
+            reads={path: "the sweep file"},
         )
     except KeyboardInterrupt:
         bar.done()
@@ -345,17 +356,20 @@ def sweep(
     workers: int | None = None,
     force: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    reads: Mapping[Path, str] | None = None,
 ) -> int:
     """Run what `out` does not have yet (shape paths are relative to `base`), each row added
     as its run ends; return how many ran. `out` is checked before any run (see
-    `open_results`); `force` lets it replace a file that is not results of these settings."""
+    `open_results`); `force` lets it replace a file that is not results of these settings,
+    but none the runs read nor any of `reads` (path: what it is, e.g. the sweep file)."""
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be at least 1, got {workers}")
     first = next(iter(runs), None)
     if first is None:
         return 0
     settings = [f"config.{name}" for name in sorted(first)]
-    with open_results(out, settings, force=force) as results:
+    inputs = files_read_by(runs, base) | dict(reads or {})
+    with open_results(out, settings, force=force, inputs=inputs) as results:
         already = sum(run_key(config) in results.done for config in runs)
         todo = (config for config in runs if run_key(config) not in results.done)
         finished = 0

@@ -194,10 +194,11 @@ def check_output(
     *,
     may_replace: bool,
     folder: bool = False,
-    inputs: Mapping[tuple[int, int], str] | None = None,
+    inputs: Mapping[Path, str] | None = None,
 ) -> None:
     """Refuse, before a run, an output that cannot be written there, that is not a regular file
-    (or, for a `folder` output, a folder), that is one of the run's `inputs` (by `identity`,
+    (or, for a `folder` output, a folder), that is one of the run's `inputs` (path: what it is
+    to the run; told apart by `identity`,
     whatever `may_replace` says: a run never writes over what it reads), or that would replace
     an existing file (or fill a non-empty folder) without `may_replace`. A symlink counts as the
     file it points to."""
@@ -222,7 +223,8 @@ def check_output(
             raise OutputError(f"{path}: {flag} needs a file name, and this is a folder")
         if not folder and not stat.S_ISREG(mode):
             raise OutputError(f"{path}: {flag} would replace a pipe or a device; name a file")
-        what = (inputs or {}).get(identity(target))
+        read = {identity(file): what for file, what in (inputs or {}).items()}
+        what = read.get(identity(target))
         if what is not None:
             raise OutputError(f"{path}: {flag} would replace {what}; name another file")
         if not may_replace and (not folder or any(target.iterdir())):
