@@ -293,6 +293,14 @@ CRAFTED = {
         lambda m: {"swarm.wander_rate": 7.0},
         "s.state: damaged state: swarm.wander_rate is 7.0",
     ),
+    "a robot under way going nowhere": (  # the fuzz (seed 41): 4 overlaps within 8 steps
+        lambda m: {"swarm.direction": np.where(m["swarm.ahead"] > 0, 0, m["swarm.direction"])},
+        "direction is none for a robot with cells reserved ahead",
+    ),
+    "a robot at rest between cells": (
+        lambda m: {"swarm.offset": np.where(m["swarm.ahead"] == 0, 0.5, m["swarm.offset"])},
+        "offset or speed puts a robot with no cell reserved on its way",
+    ),
     "robots lost that are there": (
         lambda m: {"swarm.faults.lost_at": np.zeros_like(m["swarm.faults.lost_at"])},
         "lost_at disagrees with which robots are lost",

@@ -310,6 +310,11 @@ class Swarm:
         self.overlaps = saved.array("overlaps", np.int64, (len(self.world.groups),), 0, 0)
         self.leader = saved.array("leader", np.int64, (n,), -1, n - 1)
         self.pace = saved.array("pace", np.float64, (n,), 0.1, 1)
+        under_way = self.ahead > 0
+        if (under_way & (self.direction == 0)).any():
+            raise saved.error("direction", "is none for a robot with cells reserved ahead")
+        if (~under_way & ((self.offset != 0) | (self.speed != 0))).any():
+            raise saved.error("offset", "or speed puts a robot with no cell reserved on its way")
         self.lattice = Lattice(self.world.size)
         holder = saved.array("holder", np.int64, self.lattice.holder.shape, WALL, n - 1)
         queued = saved.array("queued", np.int64, self.lattice.queued.shape, FREE, n - 1)
