@@ -224,6 +224,7 @@ def check_output(
         if not folder and not stat.S_ISREG(mode):
             raise OutputError(f"{path}: {flag} would replace a pipe or a device; name a file")
         read = {identity(file): what for file, what in (inputs or {}).items()}
+        read.pop(None, None)  # an input not there (yet) is no file to keep
         what = read.get(identity(target))
         if what is not None:
             raise OutputError(f"{path}: {flag} would replace {what}; name another file")
