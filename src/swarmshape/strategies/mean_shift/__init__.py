@@ -44,13 +44,16 @@ beside it out. What differs from the continuous original, and why:
   mean shift leaves them wandering deep inside. The paper's shape is one piece; robots at its
   full rim follow news of an empty cell elsewhere, so separate pieces form too.
 
-Counts relayed hop by hop stop at twice the shape's cell count (no path through the swarm is
-longer); the kernel reaches one cell past the sensing radius; every other constant is the
-paper's or an option.
+Counts relayed hop by hop, and news a robot keeps, stop after a lap of the shape's rim at a
+robot's pace (`lap_pace`): news older than that is of a cell long filled. At twice the shape's
+cell count (no path through the swarm is longer) robots followed such news for hundreds of
+steps: the 299-robot K took 2,271 steps, and 1,178 with the lap. The kernel reaches one cell
+past the sensing radius; every other constant is the paper's or an option.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import ClassVar
@@ -116,6 +119,13 @@ class MeanShift(Program):
             "cell that robots outside can reach too",
             at_least=0.0,
         )
+        lap_pace: float = option(
+            2.0,
+            "steps a robot takes per cell at its top speed (2 at the default half a cell a "
+            "step): news of an empty rim cell lives, and a robot follows it, for as long as a "
+            "lap of the shape's rim takes at that pace",
+            at_least=0.0,
+        )
         roam: int = option(
             20,
             "cells a robot that sees nobody localised walks straight on average before it "
@@ -128,8 +138,8 @@ class MeanShift(Program):
     ) -> tuple[np.ndarray, np.ndarray]:
         said = MESSAGE.read(sense.message)
         group, blueprint = sense.group, sense.blueprint
-        cap = 2 * sum(len(cells) for cells in blueprint.cells)
         options = self.options
+        cap = max(1, math.ceil(options.lap_pace * shape.rim(blueprint)))
         localise(sense, memory, said)
         localised, frame = memory.localised, memory.frame
         kin = sense.heard & sense.kin & ~sense.seed

@@ -39,3 +39,9 @@ def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         inside = ndimage.binary_fill_holes(grid)
         depths.append((low, ndimage.distance_transform_cdt(inside, "taxicab")))
     return tuple(depths)
+
+
+@functools.lru_cache(maxsize=4)
+def rim(blueprint: Blueprint) -> int:
+    """Cells a walk once round every group's shape passes: its cells beside the outside."""
+    return sum(int((depths == 1).sum()) for _, depths in _depths(blueprint))
