@@ -21,7 +21,7 @@ from swarmshape.io.scenario import read_start_cells
 from swarmshape.session import SHADES, ended_by_signals
 from swarmshape.ui.render import SEED_GREEN
 from tests import pictures
-from tests.conftest import SHAPES, grid_from, world_of
+from tests.conftest import SHAPES, grid_from, make_swarm, world_of
 
 HORSESHOE = str(SHAPES / "horseshoe.png")
 
@@ -297,3 +297,24 @@ def test_a_signal_as_an_output_makes_its_temporary_leaves_nothing_behind(tmp_pat
     with pytest.raises(Terminated):
         main([HORSESHOE, "--headless", "--max-steps", "5", "--frames", str(tmp_path / "out")])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_signal_that_c_code_swallows_still_ends_the_run():
+    """The fuzz (seed 42) sent SIGTERM while numba compiled a kernel: raised inside its ctypes
+    callback, `Terminated` was printed as "Exception ignored" with a traceback, and the run went
+    on to its end (exit 3). The run's watch ends it at its next step, or as the block ends."""
+    import ctypes
+
+    def callback() -> None:
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises here, and ctypes swallows it
+
+    swallowing = ctypes.CFUNCTYPE(None)(callback)
+    swarm = make_swarm(np.ones((2, 2), dtype=bool))
+    with pytest.raises(Terminated) as ended, ended_by_signals():
+        swallowing()
+    assert ended.value.code == 128 + signal.SIGTERM
+    with pytest.raises(Terminated), ended_by_signals() as watch:
+        swallowing()
+        with pytest.raises(Terminated):
+            watch.capture(swarm)  # the run's next step

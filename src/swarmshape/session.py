@@ -144,14 +144,14 @@ class Session:
                 return prepared(on)
 
         interrupted = False
-        with ended_by_signals(), self.outputs.observers() as observers:
+        with ended_by_signals() as watch, self.outputs.observers() as observers:
             if self.window or self.editing:
-                swarm = self._show(config, world, make_swarm, observers)
+                swarm = self._show(config, world, make_swarm, [watch, *observers])
             else:
                 swarm = make_swarm(world)
                 self._can_save(swarm)
                 say(opening_line(swarm, config))
-                runner = Runner(swarm, [*observers, RunProgress()], config.max_steps)
+                runner = Runner(swarm, [watch, *observers, RunProgress()], config.max_steps)
                 with stopped_by_ctrl_c(runner):
                     runner.finish()
                 interrupted = runner.stopped
@@ -238,30 +238,54 @@ class Session:
         return viewer.swarm
 
 
+class SignalWatch(Observer):
+    """Ends the run at the next step with a signal whose `Terminated` was swallowed: raised
+    inside a callback from C code (numba compiling a kernel, through ctypes), it was printed
+    as "Exception ignored" with a traceback, and the run went on to its end (the fuzz)."""
+
+    def __init__(self) -> None:
+        self.received: list[int] = []
+
+    def capture(self, swarm: Swarm) -> None:
+        self.raise_received()
+
+    def raise_received(self) -> None:
+        if self.received:
+            raise Terminated(128 + self.received[0])
+
+
 @contextlib.contextmanager
-def ended_by_signals() -> Iterator[None]:
+def ended_by_signals() -> Iterator[SignalWatch]:
     """SIGTERM and SIGHUP raise `Terminated` for a while, instead of ending the process where
     it stands (only the main thread receives signals; elsewhere nothing changes). A library
     that the signal strikes inside may turn it into an error of its own (pygame, loading a
     font, raised "TypeError: not a file object": an internal error, found by the fuzz): after
-    a signal, whatever error comes out is the signal's."""
+    a signal, whatever error comes out is the signal's. One that swallows it is caught by the
+    `SignalWatch` this yields, as a run's observer, and as the block ends."""
+    watch = SignalWatch()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield watch
         return
-    received: list[int] = []
 
     def end(number: int, _frame: object) -> None:
-        received.append(number)
+        watch.received.append(number)
         raise Terminated(128 + number)
 
+    def unraisable(hook: Any) -> None:  # raised again by the watch: not printed here
+        if not isinstance(hook.exc_value, Terminated):
+            printed(hook)
+
     previous = {number: signal.signal(number, end) for number in (signal.SIGTERM, signal.SIGHUP)}
+    printed, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
-        yield
+        yield watch
+        watch.raise_received()
     except Exception as error:
-        if received:
-            raise Terminated(128 + received[0]) from error
+        if watch.received:
+            raise Terminated(128 + watch.received[0]) from error
         raise
     finally:
+        sys.unraisablehook = printed
         for number, handler in previous.items():
             signal.signal(number, handler)
 
