@@ -58,8 +58,8 @@ def _pair(value: Any) -> tuple[int, int]:
         value = value.lower().split("x")
     if not isinstance(value, list | tuple) or len(value) != 2:
         raise ValueError
-    if isinstance(value[0], str):
-        value = [INTEGER.parse(part) for part in value]
+    # each part as text or as a number: a file's list may hold both (the fuzz: ["0", 20])
+    value = [INTEGER.parse(part) if isinstance(part, str) else part for part in value]
     width, height = (INTEGER.coerce(v) for v in value)
     if width < 1 or height < 1:
         raise ValueError

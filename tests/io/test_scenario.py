@@ -46,6 +46,11 @@ def write(tmp_path, text):
             r"s\.toml: groups\[0\]\.pose: rotation must be a multiple of 90 degrees, got 45",
         ),
         ("arena = [10]\n[[groups]]\nshape = 'line.png'\n", "arena must be two whole numbers"),
+        (  # the fuzz (seed 42): text and a number in one list was an internal error
+            "arena = ['0', 20]\n[[groups]]\nshape = 'line.png'\n",
+            "arena must be two whole numbers",
+        ),
+        ("arena = [0.5, '20']\n[[groups]]\nshape = 'line.png'\n", "arena must be two whole"),
         ("order = 'random'\n[[groups]]\nshape = 'line.png'\n", "order is an option of paper"),
         ("[options]\norder = 'random'\n[[groups]]\nshape = 'line.png'\n", "not of optimal"),
         ("max_speed = 'fast'\n[[groups]]\nshape = 'line.png'\n", "max_speed must be"),
