@@ -15,18 +15,24 @@ from swarmshape.core.shape import Shape
 from swarmshape.core.states import LOST, STALLED
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
+from swarmshape.runs import Runner
 from swarmshape.strategies import available, create
 
 STRATEGIES = sorted(available())
 
 
 def watched(swarm: Swarm, steps: int) -> InvariantWatch:
-    """Step a fixed number of steps, through formation and beyond, under the watch."""
+    """Step under the watch until the run would end (formed, gone quiet or stranded, with no
+    fault to come), then as long again beyond it, as a window goes on showing it; under a
+    failure rate, which strikes at any step, the whole budget of `steps`."""
     watch = InvariantWatch()
-    watch.capture(swarm)
-    for _ in range(steps):
-        swarm.step()
-        watch.capture(swarm)
+    runner = Runner(swarm, [watch], max_steps=steps)
+    while not runner.finished:
+        runner.step()
+    if swarm.faults.rate == 0:
+        runner.max_steps = min(steps, 2 * swarm.step_count)
+    while not runner.out_of_steps:
+        runner.step()
     return watch
 
 
