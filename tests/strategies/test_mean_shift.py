@@ -9,7 +9,7 @@ import pytest
 
 from swarmshape.config import configure
 from swarmshape.core.metrics import run_metrics
-from swarmshape.runs import build, run
+from swarmshape.runs import build, load_world, run, start_swarm
 from swarmshape.strategies.mean_shift import IN_PLACE
 from tests.conftest import SHAPES
 
@@ -50,3 +50,19 @@ def test_without_the_entering_command_robots_outside_never_come_in():
     still = formed("star.png", max_steps=400, cells=12, seed=5, options={"entering": 0.0})
     assert run_metrics(still)["coverage"] < 0.5
     assert formed("star.png", max_steps=3000, cells=12, seed=5).complete
+
+
+def test_a_robot_in_the_rings_middle_is_let_in_by_a_hole_carried_to_it():
+    """Every robot but one on the ring, that one in its middle, and the one empty cell on the
+    outer rim: robots in place carry holes outward, away from the middle, so this hole must be
+    carried in to it (`holes.pulled`; the 672-robot ring stopped a cell short for want of it)."""
+    config = configure(SHAPES / "ring.png", strategy="mean-shift", cells=16, seed=0)
+    world = load_world(config)
+    targets = world.targets
+    middle = np.floor(targets.mean(axis=0)).astype(np.int64)
+    assert not (targets == middle).all(axis=1).any(), "the middle is off the ring"
+    outermost = np.argmax(np.abs(targets - middle).sum(axis=1))
+    start = np.concatenate([np.delete(targets, outermost, axis=0), [middle]])
+    swarm = run(start_swarm(config, world, start), max_steps=2000)
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0

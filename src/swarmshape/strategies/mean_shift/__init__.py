@@ -14,8 +14,9 @@ Each step a robot:
 4. moves one cell the way that sum points most, among the cells it may enter: a robot inside
    the shape stays inside it and enters only cells deeper in it than its own, so that the
    empty cell it leaves lies nearer the robots outside, and one in place enters only a cell
-   they cannot reach (`holes`); a robot outside that can reach an empty shape cell it senses
-   takes only moves that bring it nearer one (`explore.nearer`);
+   they cannot reach (`holes`), or, when a robot waits in a pocket the shape encloses, one
+   that carries a hole nearer to it (`holes.pulled`); a robot outside that can reach an empty
+   shape cell it senses takes only moves that bring it nearer one (`explore.nearer`);
 5. keeps going without braking while the same move is still its choice from the cell it is
    coming to (cruising).
 
@@ -71,12 +72,13 @@ from swarmshape.strategies.skills.localise import FIXED, find_the_others, locali
 from swarmshape.strategies.skills.view import View
 
 MESSAGE = Schema(
-    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1,
+    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1, pull=1,
 )  # fmt: skip
 """What a robot broadcasts: whether it knows where it is, its frame cell, whether it stays on it
 next step, the way it is moving and how far along (see `skills.localise`); an empty rim cell it
-has news of and its hops to the robot that sees it (`holes.open_news`), the count said as
-`relay.said` puts it (0: none)."""
+has news of and its hops to the robot that sees it (`holes.open_news`), and its hops to a robot
+waiting in a pocket of the shape (`holes.pulled`), counts said as `relay.said` puts them (0:
+none)."""
 
 LOST, OUTSIDE, INSIDE, IN_PLACE = range(4)
 
@@ -168,7 +170,9 @@ class MeanShift(Program):
         rows = np.flatnonzero(outside & sees)
         toward = np.zeros((len(sense), len(STEPS) - 1), dtype=bool)
         toward[rows] = explore.nearer(view.taken[rows], offset[rows], free[rows], window.offsets)
-        moves = self._moves(sense, memory, said, view, offset, inside, command, toward)
+        waiting = outside & ~sees & shape.enclosed(blueprint, group, base)
+        pull = self._pull(sense, said, kin, on_shape | waiting, waiting, cap)
+        moves = self._moves(sense, memory, said, view, offset, inside, command, toward, pull, cap)
         lost = find_the_others(sense, memory, said, view, options.roam, rng)
         moves = np.where(localised, moves, lost)
         stays = sense.ready & (moves == 0)
@@ -187,8 +191,26 @@ class MeanShift(Program):
             progress=np.rint(sense.progress * FIXED),
             news=memory.news,
             news_hops=relay.said(memory.news_hops, cap),
+            pull=relay.said(pull, cap),
         )
         return moves, messages
+
+    @staticmethod
+    def _pull(
+        sense: Perception,
+        said: SimpleNamespace,
+        kin: np.ndarray,
+        relays: np.ndarray,
+        waiting: np.ndarray,
+        cap: int,
+    ) -> np.ndarray:
+        """Each robot's hops to a robot `waiting` in a pocket of the shape, through robots on
+        the shape (only they can carry a hole to it), `cap` for none."""
+        told = np.zeros((len(sense.owner), 0), dtype=np.int64)
+        found = np.zeros((len(sense), 0), dtype=np.int64)
+        heard = kin & (said.localised == 1)
+        pull, _ = relay.relay(sense, heard, relay.heard(said.pull), told, waiting, found, cap)
+        return np.where(relays, pull, cap)
 
     def _moves(
         self,
@@ -200,11 +222,15 @@ class MeanShift(Program):
         inside: np.ndarray,
         command: np.ndarray,
         toward: np.ndarray,
+        pull: np.ndarray,
+        cap: int,
     ) -> np.ndarray:
         """Each robot's move: the way its command points most among the cells it may enter
         from its base (see the module's description); under way, on straight ahead or none.
         A robot outside that can reach an empty shape cell it senses moves only `toward` it
-        ``(n, 4)`` (see `explore.nearer`)."""
+        ``(n, 4)`` (see `explore.nearer`); one inside that hears a `pull` only carries holes
+        toward the pocket it comes from (`holes.pulled`): drawn back into the cell it left, it
+        would carry the hole back again."""
         n = len(sense)
         ways = STEPS[1:]
         into = offset[:, None, :] + ways[None]
@@ -220,9 +246,14 @@ class MeanShift(Program):
         deeper = open_ & in_shape.reshape(n, -1) & (depth > here[:, None])
         # a hole robots coming in can reach is theirs; a robot on its way in takes one too
         # when the mean shift draws it there
-        reachable = holes.open_holes(sense, memory.frame, said, view, into)
+        met, empty = holes.open_holes(sense, memory.frame, said, view, into)
         drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
-        inward = deeper & (~reachable | drawn)
+        inward = deeper & (~(met | empty) | drawn)
+        # a robot coming in beside a hole keeps it; one waiting in a pocket pulls the others
+        pulling = inside & (pull < cap)
+        to_pocket = open_ & in_shape.reshape(n, -1) & ~met
+        to_pocket &= holes.pulled(sense, said, view, into, pull, cap)
+        inward[pulling] = to_pocket[pulling]
         allowed = np.where(inside[:, None], inward, outward)
         best = 1 + np.argmax(np.where(allowed, score, -np.inf), axis=1)
         moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)

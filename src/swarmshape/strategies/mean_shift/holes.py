@@ -17,6 +17,14 @@ robot on its way, and a new part drawn beside a formed shape moved robots on its
 A robot outside that senses no empty cell, beside the shape with its rim full (or at another
 piece of it), follows news of an empty rim cell that robots inside see with nobody outside in
 sight of it (a relay), round the shape (`swarmshape.strategies.routes`).
+
+A robot in a pocket the shape encloses (a ring's middle) can come in only through the
+pocket's rim, where holes, carried outward, never go: once the rim round it is full it waits
+for good (the 672-robot ring stopped 1 to 3 cells short on 5 of 10 seeds). Such a robot
+pulls: robots on the shape relay their hops to it, and a robot inside that hears a pull only
+carries a hole beside it one hop nearer the pocket, never outward (`pulled`). Hops fall by one
+a move, so a hole reaches the pocket in as many moves as its hops, and no two robots pass it
+back and forth.
 """
 
 from __future__ import annotations
@@ -34,11 +42,12 @@ from swarmshape.strategies.skills.view import View
 
 def open_holes(
     sense: Perception, frame: np.ndarray, said: SimpleNamespace, view: View, cells: np.ndarray
-) -> np.ndarray:
-    """``(n, k)``: for cells ``(n, k, 2)`` relative to each robot's own, whether robots coming
-    in can reach the cell: beside it lies a cell (not the robot's own) shallower in the shape
-    (outside it is shallowest) that is empty, or holds a robot of the group on its way in (one
-    that speaks, outside the shape or not staying where it is; stalled robots are silent)."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(n, k)`` twice: for cells ``(n, k, 2)`` relative to each robot's own, whether a robot
+    of the group on its way in (one that speaks, outside the shape or not staying where it is;
+    stalled robots are silent) is beside the cell, and whether robots coming in can reach it
+    through an empty cell beside it; either lies beside it (not the robot's own cell),
+    shallower in the shape (outside it is shallowest)."""
     n, k = cells.shape[:2]
     groups, rows = np.repeat(sense.group, k), np.repeat(np.arange(n), k)
 
@@ -49,15 +58,49 @@ def open_holes(
     # per entry, and False for none (a `who` of -1 picks the last)
     speaks = np.append(sense.heard & sense.kin & ~sense.seed, False)
     moving = np.append(said.stays == 0, False)
-    found = np.zeros(n * k, dtype=bool)
+    met = np.zeros(n * k, dtype=bool)
+    empty = np.zeros(n * k, dtype=bool)
     for step in STEPS[1:]:
         beside = cells + step
         taken, who = view.at(rows, beside.reshape(-1, 2))
         there = depth(beside)
-        coming_in = speaks[who] & ((there == 0) | moving[who])
-        way_in = (~taken | coming_in) & (beside != 0).any(axis=2).ravel()
-        found |= way_in & (there < here)
-    return found.reshape(n, k)
+        way_in = (there < here) & (beside != 0).any(axis=2).ravel()
+        met |= way_in & speaks[who] & ((there == 0) | moving[who])
+        empty |= way_in & ~taken
+    return met.reshape(n, k), empty.reshape(n, k)
+
+
+def pulled(
+    sense: Perception,
+    said: SimpleNamespace,
+    view: View,
+    cells: np.ndarray,
+    pull: np.ndarray,
+    cap: int,
+) -> np.ndarray:
+    """``(n, 4)``: whether each robot is the one to move into the cell each way from its base
+    (`cells` ``(n, 4, 2)``, relative to its own cell, in `STEPS` order), carrying a hole there
+    toward a robot waiting in a pocket: it hears a pull, and of the robots it senses beside
+    that cell it has the fewest hops to the pocket (the first in `STEPS` order of equals,
+    counted from the cell, so that every robot beside it agrees)."""
+    n, ways = len(sense), STEPS[1:]
+    rows = np.arange(n)
+    # per entry, and a count never heard for none (a `who` of -1 picks the last)
+    heard = np.where(sense.heard & sense.kin & ~sense.seed, relay.heard(said.pull), relay.NONE)
+    heard = np.append(heard, relay.NONE)
+    order = {tuple(way): index for index, way in enumerate(ways)}
+    chosen = np.zeros((n, len(ways)), dtype=bool)
+    for index, way in enumerate(ways):
+        mine = order[tuple(-way)]
+        wins = pull < cap
+        for other in ways:
+            if (other == -way).all():  # the robot's own base
+                continue
+            taken, who = view.at(rows, cells[:, index] + other)
+            theirs, rank = heard[who], order[tuple(other)]
+            wins &= ~(taken & ((theirs < pull) | ((theirs == pull) & (rank < mine))))
+        chosen[:, index] = wins
+    return chosen
 
 
 def open_news(

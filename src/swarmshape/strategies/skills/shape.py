@@ -25,6 +25,12 @@ def depth(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.nda
     return box_lookup(_depths(blueprint), groups, frame)
 
 
+def enclosed(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """Whether each frame cell lies outside its group's shape in a pocket the shape (with its
+    seeds) encloses: a robot there can come in only through the pocket's own rim."""
+    return (depth(blueprint, groups, frame) > 0) & ~blueprint.contains(groups, frame)
+
+
 @functools.lru_cache(maxsize=4)
 def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
     """Per group, the depth of each cell as a box for `box_lookup` (the low corner less one,
