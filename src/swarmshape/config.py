@@ -75,9 +75,18 @@ def start_of(value: Any) -> str | Path:
         raise ValueError
     if value in START_LAYOUTS:
         return value
-    if "\0" not in value and (Path(value).suffix.lower() == ".csv" or Path(value).exists()):
+    if Path(value).suffix.lower() == ".csv" or _names_a_file(value):
         return Path(value)
     raise ValueError
+
+
+def _names_a_file(text: str) -> bool:
+    """Whether `text` names a file that exists: a name the system refuses outright (a NUL in
+    it, or too long: a state file's config can hold anything) names none."""
+    try:
+        return Path(text).exists()
+    except (OSError, ValueError):
+        return False
 
 
 def _faults(value: Any) -> tuple[FaultEvent, ...]:
