@@ -61,6 +61,22 @@ def test_a_killed_sweep_resumes_without_redoing_finished_rows(tiny, tmp_path):
     assert all(row["wall_time"] == kept[row["run"]] for row in again if row["run"] in kept)
 
 
+def test_a_sweep_never_resumes_into_another_sweeps_results(tiny, tmp_path):
+    """Issue 29, case 4, through `sweep` itself (the fuzz, seed 46): its results file only
+    knew which runs were the sweep's when told, and the sweep never told it, so a sweep whose
+    --out held another sweep's rows added its own to them, exit 0."""
+    out = tmp_path / "out.csv"
+    sweep(read_sweep(tiny), out, tiny.parent, workers=1)
+    theirs = out.read_bytes()
+    other = tmp_path / "other.toml"
+    other.write_text(TINY.replace("seeds = 2", "seeds = 2\nmax_steps = 900"))
+    with pytest.raises(InputError, match="is a run this sweep does not have"):
+        sweep(read_sweep(other), out, other.parent, workers=1)
+    assert out.read_bytes() == theirs
+    assert sweep(read_sweep(other), out, other.parent, workers=1, force=True) == 8
+    assert {row["config.max_steps"] for row in read_rows(out)} == {"900"}
+
+
 def test_the_command_line_sweeps_and_plots(tiny, tmp_path, capsys):
     assert main(["sweep", str(tiny), "--workers", "2"]) == 0
     out = capsys.readouterr().out

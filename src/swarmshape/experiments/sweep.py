@@ -369,7 +369,8 @@ def sweep(
         return 0
     settings = [f"config.{name}" for name in sorted(first)]
     inputs = files_read_by(runs, base) | dict(reads or {})
-    with open_results(out, settings, force=force, inputs=inputs) as results:
+    keys = {run_key(config) for config in runs}
+    with open_results(out, settings, runs=keys, force=force, inputs=inputs) as results:
         already = sum(run_key(config) in results.done for config in runs)
         todo = (config for config in runs if run_key(config) not in results.done)
         finished = 0
