@@ -79,6 +79,12 @@ NEAR8 = np.array([6, 7, 8, 11, 13, 16, 17, 18])
 """The window slots of the 8 cells around the robot."""
 TOUCHING = np.isin(np.arange(25), NEAR8)
 """Per window slot, whether it is one of `NEAR8`."""
+AHEAD = _slot(STEPS)
+"""``[d]``: the window slot of the cell one step in direction d (the robot's own for 0)."""
+RIGHT_SIDE = _slot(STEPS[RIGHT])
+"""``[d]``: the window slot of the cell on the right of a robot heading d."""
+FRONT_RIGHT = _slot(STEPS + STEPS[RIGHT])
+"""``[d]``: the window slot of the cell ahead and to the right of a robot heading d."""
 SIDES_IN_A_WINDOW = np.stack([np.zeros((3, 3), bool), ndimage.generate_binary_structure(2, 1),
                               np.zeros((3, 3), bool)])  # fmt: skip
 """Cells that share a side, within one robot's window of a stack of windows."""
@@ -408,7 +414,7 @@ def _leave(view: _View, memory: Memory, options: SelfAssembly.Options) -> None:
     state = memory.state
     waiting = state == WAIT
     first = waiting & (memory.gradient < INFINITE) & ~view.outranked & ~view.mover_near
-    heading = _first_heading(view)
+    heading = _first_heading(view, first)
     first &= heading > 0
     memory.eligible = np.where(first, memory.eligible + 1, 0)
     lossy = memory.since_loss < options.loss_memory
@@ -422,18 +428,19 @@ def _leave(view: _View, memory: Memory, options: SelfAssembly.Options) -> None:
     state[lonely] = WANDER
 
 
-def _first_heading(view: _View) -> np.ndarray:
-    """The heading that puts the stationary robots on the right: a free direction whose right
-    side is stationary, or else one whose front-right cell is; 0 if none."""
-    n = len(view.ready)
-    heading = np.zeros(n, dtype=np.int64)
-    for pick in ("side", "corner"):
+def _first_heading(view: _View, robots: np.ndarray) -> np.ndarray:
+    """For the `robots` (a mask), the heading that puts the stationary robots on the right: a
+    free direction whose right side is stationary, or else one whose front-right cell is; 0
+    if none, and for every other robot."""
+    heading = np.zeros(len(view.ready), dtype=np.int64)
+    rows = np.flatnonzero(robots)
+    taken, stationary = view.taken[rows], view.stationary[rows]
+    chosen = np.zeros(len(rows), dtype=np.int64)
+    for wall in (RIGHT_SIDE, FRONT_RIGHT):
         for d in (1, 3, 2, 4):
-            ahead = _slot(STEPS[d])
-            side = STEPS[RIGHT[d]]
-            wall = _slot(side if pick == "side" else STEPS[d] + side)
-            fits = (heading == 0) & ~view.taken[:, ahead] & view.stationary[:, wall]
-            heading[fits] = d
+            fits = (chosen == 0) & ~taken[:, AHEAD[d]] & stationary[:, wall[d]]
+            chosen[fits] = d
+    heading[rows] = chosen
     return heading
 
 
@@ -452,7 +459,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     heading = np.where(memory.heading > 0, memory.heading, 1)
     for turn in (RIGHT, np.arange(5), LEFT, REVERSE):
         d = turn[heading]
-        target = _slot(STEPS[d])
+        target = AHEAD[d]
         wall = view.stationary[rows, target]
         contact = view.stationary[rows[:, None], AROUND[d]].any(axis=1)
         fits = (choice == 0) & ~wall & contact
@@ -480,7 +487,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     way = np.where(sealed > 0, sealed, way)
     state[join] = JOINED
     memory.gradient[join] = mine[join]
-    blocked = view.taken[rows, _slot(STEPS[way])]
+    blocked = view.taken[rows, AHEAD[way]]
     step = going & ~join & (way > 0) & ~blocked
     moves[step] = way[step]
     memory.want = np.where(going & ~join & (way > 0) & blocked, way, 0)
@@ -491,7 +498,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     moves[lost] = 0
     found = (state == WANDER) & view.ready & ~view.unknown[:, NEAR8].any(axis=1)
     found &= (view.stationary[:, NEAR8] & (view.gradient[:, NEAR8] < INFINITE)).any(axis=1)
-    heading = _first_heading(view)
+    heading = _first_heading(view, found)
     found &= heading > 0
     state[found] = OUTSIDE
     memory.heading[found] = heading[found]
@@ -505,6 +512,8 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     if the robot stopped here, no robot could ever reach them (a lattice's dead ends, which
     the paper's round robots on a continuous floor do not meet)."""
     a = len(stationary)
+    if not a:  # most steps: scipy's checks alone cost more than the rest of the step's work
+        return np.zeros(0, dtype=bool)
     free = ~stationary.reshape(a, 5, 5)
     free[:, 2, 2] = False
     start = np.zeros((a, 5, 5), dtype=bool)
@@ -526,7 +535,7 @@ def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Gener
     noise[:, 3] += 2.0 * (by > 0) + (np.abs(by) > np.abs(bx)) * (by > 0)
     noise[:, 4] += 2.0 * (by < 0) + (np.abs(by) > np.abs(bx)) * (by < 0)
     for d in range(1, 5):
-        noise[view.taken[:, _slot(STEPS[d])], d] = -1.0
+        noise[view.taken[:, AHEAD[d]], d] = -1.0
     choice = noise.argmax(axis=1)
     walking &= noise.max(axis=1) > 0.5
     moves[walking] = choice[walking]
