@@ -6,12 +6,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import example, given
+from hypothesis import strategies as st
+from scipy import ndimage
 
 from swarmshape.config import configure
 from swarmshape.core.metrics import run_metrics
+from swarmshape.core.motion import STEPS
+from swarmshape.core.perception import Blueprint
+from swarmshape.core.shape import Shape
 from swarmshape.runs import build, load_world, run, start_swarm
 from swarmshape.strategies.mean_shift import IN_PLACE
-from tests.conftest import SHAPES
+from swarmshape.strategies.skills import shape as skills
+from tests.conftest import SHAPES, make_swarm
 
 
 def formed(shape: str, max_steps: int = 3000, **settings):
@@ -66,3 +73,51 @@ def test_a_robot_in_the_rings_middle_is_let_in_by_a_hole_carried_to_it():
     swarm = run(start_swarm(config, world, start), max_steps=2000)
     assert swarm.complete, run_metrics(swarm)
     assert swarm.overlap_total == 0
+
+
+def test_a_robot_beside_a_full_piece_goes_round_to_a_piece_no_robot_senses():
+    """Two one-cell pieces farther apart than the sensing radius, one robot on each side:
+    the robot beside the filled piece senses no empty cell and hears of none, so it walks the
+    shape's rim cells in turn (`shape.tour`) until it senses the other (it stood beside the
+    filled one for good)."""
+    grid = np.zeros((4, 5), dtype=bool)
+    grid[1, 1] = grid[3, 4] = True
+    swarm = run(make_swarm(grid, agents=2, seed=0, strategy="mean-shift"), max_steps=2000)
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0
+
+
+SLOTS = np.ones((7, 7), dtype=bool)
+SLOTS[2:5, 1] = SLOTS[1:6, 3] = False
+"""A square round two slots."""
+
+
+def test_holes_come_out_past_pockets_the_shape_encloses():
+    """Depth counted straight across a slot left the cells beside it with no shape cell a step
+    shallower, and a hole there never came out (every seed of this shape, and the 323-robot
+    horse)."""
+    swarm = run(make_swarm(SLOTS, seed=0, strategy="mean-shift"), max_steps=3000)
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0
+
+
+@given(bits=st.lists(st.booleans(), min_size=49, max_size=49))
+@example(bits=SLOTS.ravel().tolist())
+def test_every_shape_cell_deeper_than_the_rim_has_a_shallower_one_beside_it(bits):
+    """Holes travel out one step shallower a move, so every cell of a piece that reaches the
+    rim must have such a step (a piece inside a pocket, which no robot comes in to, need not)."""
+    grid = np.array(bits).reshape(7, 7)
+    if not grid.any():
+        return
+    cells = Shape(grid).cells
+    blueprint = Blueprint.of([cells])
+    groups = np.zeros(len(cells), dtype=np.int64)
+    depth = skills.depth(blueprint, groups, cells)
+    shallower = np.zeros(len(cells), dtype=bool)
+    for step in STEPS[1:]:
+        beside = cells + step
+        there = skills.depth(blueprint, groups, beside)
+        shallower |= blueprint.contains(groups, beside) & (there == depth - 1)
+    pieces = ndimage.label(grid)[0][cells[:, 1], cells[:, 0]]
+    reaches_rim = np.isin(pieces, pieces[depth == 1])
+    assert (shallower | (depth == 1) | ~reaches_rim).all()

@@ -43,7 +43,9 @@ beside it out. What differs from the continuous original, and why:
   distance, so a full shape needs no exact tiling. With a robot per cell, the last empty cells
   must travel out through the robots in place to those still outside (`holes`); on its own the
   mean shift leaves them wandering deep inside. The paper's shape is one piece; robots at its
-  full rim follow news of an empty cell elsewhere, so separate pieces form too.
+  full rim follow news of an empty cell elsewhere, and one that hears of no robot sensing an
+  empty cell walks the shape's rim cells in turn (`MeanShift._tour`), so separate pieces form
+  too, however far apart.
 
 Counts relayed hop by hop, and news a robot keeps, stop after a lap of the shape's rim at a
 robot's pace (`lap_pace`): news older than that is of a cell long filled. At twice the shape's
@@ -73,11 +75,13 @@ from swarmshape.strategies.skills.view import View
 
 MESSAGE = Schema(
     localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1, pull=1,
+    seen=1,
 )  # fmt: skip
 """What a robot broadcasts: whether it knows where it is, its frame cell, whether it stays on it
 next step, the way it is moving and how far along (see `skills.localise`); an empty rim cell it
 has news of and its hops to the robot that sees it (`holes.open_news`), and its hops to a robot
-waiting in a pocket of the shape (`holes.pulled`), counts said as `relay.said` puts them (0:
+waiting in a pocket of the shape (`holes.pulled`), and its hops to a robot that sees an
+empty cell of the shape (`MeanShift._tour`), counts said as `relay.said` puts them (0:
 none)."""
 
 LOST, OUTSIDE, INSIDE, IN_PLACE = range(4)
@@ -98,6 +102,8 @@ class MeanShift(Program):
         "news": Slot(np.int64, 0, 2),
         "news_hops": Slot(np.int64, relay.NONE),
         "in_place": Slot(bool, False),
+        "tour": Slot(np.int64, -1),
+        "toured": Slot(np.int64, 0),
     }
 
     @dataclass(frozen=True)
@@ -161,17 +167,22 @@ class MeanShift(Program):
         command = options.exploring * shift + np.where(
             inside[:, None], 0.0, options.entering * pull
         )
-        rows = np.flatnonzero(localised & ~inside & ~sees & (memory.news_hops < cap))
-        way, found = routes.waypoints(
-            blueprint, group[rows], base[rows], memory.news[rows], int(sense.radius)
-        )
+        heard = localised & ~inside & ~sees & (memory.news_hops < cap)
+        waiting = outside & ~sees & shape.enclosed(blueprint, group, base)
+        speaks = kin & (said.localised == 1)
+        seen = self._hops(sense, speaks, said.seen, localised & sees, localised, cap)
+        quiet = outside & ~sees & ~waiting & ~heard & (seen >= cap)
+        touring = self._tour(sense, memory, base, quiet)
+        rows = np.flatnonzero(heard | touring)
+        goal = np.where(heard[rows, None], memory.news[rows], shape.tour(
+            blueprint, group[rows], memory.tour[rows])[0])  # fmt: skip
+        way, found = routes.waypoints(blueprint, group[rows], base[rows], goal, int(sense.radius))
         rows = rows[found]
         command[rows] = options.entering * explore.unit(way[found] - base[rows])
         rows = np.flatnonzero(outside & sees)
         toward = np.zeros((len(sense), len(STEPS) - 1), dtype=bool)
         toward[rows] = explore.nearer(view.taken[rows], offset[rows], free[rows], window.offsets)
-        waiting = outside & ~sees & shape.enclosed(blueprint, group, base)
-        pull = self._pull(sense, said, kin, on_shape | waiting, waiting, cap)
+        pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)
         moves = self._moves(sense, memory, said, view, offset, inside, command, toward, pull, cap)
         lost = find_the_others(sense, memory, said, view, options.roam, rng)
         moves = np.where(localised, moves, lost)
@@ -192,25 +203,51 @@ class MeanShift(Program):
             news=memory.news,
             news_hops=relay.said(memory.news_hops, cap),
             pull=relay.said(pull, cap),
+            seen=relay.said(seen, cap),
         )
         return moves, messages
 
     @staticmethod
-    def _pull(
+    def _tour(sense: Perception, memory: Memory, base: np.ndarray, quiet: np.ndarray) -> np.ndarray:
+        """Which robots walk the shape's tour (`shape.tour`) to find an empty cell that no
+        robot within a lap's hops senses (a piece of the shape beyond the sensing radius of
+        every robot): `quiet` ones outside (seeing no empty cell, hearing of none) that stand
+        beside the shape, from the tour cell nearest them, once round. Each goes on to
+        the next tour cell as soon as it senses this one; one that sees or hears of an empty
+        cell starts over when it next has none."""
+        blueprint, group = sense.blueprint, sense.group
+        memory.tour[~quiet] = -1
+        starts = quiet & (memory.tour < 0) & (explore.grey(blueprint, group, base) == 1)
+        memory.tour[starts] = shape.nearest_on_tour(blueprint, group[starts], base[starts])
+        memory.toured[starts] = 0
+        rows = np.flatnonzero(quiet & (memory.tour >= 0))
+        while len(rows):
+            cell, length = shape.tour(blueprint, group[rows], memory.tour[rows])
+            on = memory.toured[rows] < length
+            on &= np.hypot(*(cell - base[rows]).T) <= sense.radius
+            rows = rows[on]
+            memory.tour[rows] = (memory.tour[rows] + 1) % length[on]
+            memory.toured[rows] += 1
+        _, length = shape.tour(blueprint, group, np.maximum(memory.tour, 0))
+        return quiet & (memory.tour >= 0) & (memory.toured < length)
+
+    @staticmethod
+    def _hops(
         sense: Perception,
-        said: SimpleNamespace,
-        kin: np.ndarray,
+        heard: np.ndarray,
+        counts: np.ndarray,
+        sources: np.ndarray,
         relays: np.ndarray,
-        waiting: np.ndarray,
         cap: int,
     ) -> np.ndarray:
-        """Each robot's hops to a robot `waiting` in a pocket of the shape, through robots on
-        the shape (only they can carry a hole to it), `cap` for none."""
+        """Each robot's hops to the nearest of `sources`, from the `counts` its neighbours
+        said (per entry; those `heard`), passed on by `relays` only: `cap` (none) for the
+        others. Robots waiting in a pocket pull through robots on the shape, who alone can
+        carry a hole to them (`holes.pulled`)."""
         told = np.zeros((len(sense.owner), 0), dtype=np.int64)
         found = np.zeros((len(sense), 0), dtype=np.int64)
-        heard = kin & (said.localised == 1)
-        pull, _ = relay.relay(sense, heard, relay.heard(said.pull), told, waiting, found, cap)
-        return np.where(relays, pull, cap)
+        hops, _ = relay.relay(sense, heard, relay.heard(counts), told, sources, found, cap)
+        return np.where(relays, hops, cap)
 
     def _moves(
         self,

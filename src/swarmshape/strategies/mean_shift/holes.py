@@ -46,8 +46,9 @@ def open_holes(
     """``(n, k)`` twice: for cells ``(n, k, 2)`` relative to each robot's own, whether a robot
     of the group on its way in (one that speaks, outside the shape or not staying where it is;
     stalled robots are silent) is beside the cell, and whether robots coming in can reach it
-    through an empty cell beside it; either lies beside it (not the robot's own cell),
-    shallower in the shape (outside it is shallowest)."""
+    through an empty cell beside it (not in a pocket the shape encloses, which no robot comes
+    in from); either lies beside it (not the robot's own cell), shallower in the shape
+    (outside it is shallowest)."""
     n, k = cells.shape[:2]
     groups, rows = np.repeat(sense.group, k), np.repeat(np.arange(n), k)
 
@@ -66,7 +67,8 @@ def open_holes(
         there = depth(beside)
         way_in = (there < here) & (beside != 0).any(axis=2).ravel()
         met |= way_in & speaks[who] & ((there == 0) | moving[who])
-        empty |= way_in & ~taken
+        pocket = shape.enclosed(sense.blueprint, groups, (frame[:, None] + beside).reshape(-1, 2))
+        empty |= way_in & ~taken & ~pocket
     return met.reshape(n, k), empty.reshape(n, k)
 
 

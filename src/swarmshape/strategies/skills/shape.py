@@ -18,10 +18,13 @@ MARGIN = 2
 
 
 def depth(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
-    """Each frame cell's taxicab distance to the nearest cell outside its group's shape, 0
-    outside it. The seeds count as inside (no robot comes in past them), and so do pockets
-    the shape encloses, which no robot comes in from: a cell is deep when it lies far from
-    where robots come in."""
+    """How deep each frame cell lies in its group's shape, 0 outside it: for a shape cell, the
+    fewest moves through shape cells to one beside the outside, plus one; for a pocket the
+    shape encloses, or a seed, its taxicab distance to the outside. The seeds count as inside
+    (no robot comes in past them), and so do the pockets, which no robot comes in from: a cell
+    is deep when it lies far from where robots come in. Counted through the shape, every shape
+    cell deeper than 1 has a shape cell a step shallower beside it, so a hole carried outward
+    never sticks beside a pocket (the horse's one-cell slot held one for good)."""
     return box_lookup(_depths(blueprint), groups, frame)
 
 
@@ -40,14 +43,69 @@ def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         cells = np.concatenate([shape, SEED_CELLS])
         low = cells.min(axis=0) - MARGIN - 1
         size = cells.max(axis=0) + MARGIN + 2 - low
-        grid = np.zeros(size, dtype=bool)
-        grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
-        inside = ndimage.binary_fill_holes(grid)
-        depths.append((low, ndimage.distance_transform_cdt(inside, "taxicab")))
+        body = np.zeros(size, dtype=bool)
+        body[shape[:, 0] - low[0], shape[:, 1] - low[1]] = True
+        grid = body.copy()
+        grid[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
+        depths.append((low, _through(body, ndimage.binary_fill_holes(grid))))
     return tuple(depths)
+
+
+def _through(shape: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """The depth of each cell of a box (see `depth`): `shape` its shape cells, `inside` those
+    and the seeds and pockets. A shape cell walled off from the outside by pockets keeps its
+    taxicab depth."""
+    depths = ndimage.distance_transform_cdt(inside, "taxicab")
+    front = shape & (depths == 1)
+    reached, level = front.copy(), 1
+    four = ndimage.generate_binary_structure(2, 1)
+    while front.any():
+        depths[front] = level
+        front = ndimage.binary_dilation(front, four) & shape & ~reached
+        reached |= front
+        level += 1
+    return depths
 
 
 @functools.lru_cache(maxsize=4)
 def rim(blueprint: Blueprint) -> int:
     """Cells a walk once round every group's shape passes: its cells beside the outside."""
     return sum(int((depths == 1).sum()) for _, depths in _depths(blueprint))
+
+
+def tour(
+    blueprint: Blueprint, groups: np.ndarray, index: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per robot, the frame cell at place `index` of its group's tour, and the tour's length:
+    the shape's cells beside the outside in turn round their middle, so that a walk from one to
+    the next passes every piece of the shape (a robot beside a full piece finds the others)."""
+    cells = np.zeros((len(groups), 2), dtype=np.int64)
+    length = np.zeros(len(groups), dtype=np.int64)
+    for group, walk in enumerate(_tours(blueprint)):
+        mine = np.flatnonzero(groups == group) if len(walk) else []
+        cells[mine] = walk[index[mine] % len(walk)]
+        length[mine] = len(walk)
+    return cells, length
+
+
+def nearest_on_tour(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """Per robot, the place on its group's tour (see `tour`) of the tour cell nearest its frame
+    cell ``(n, 2)``."""
+    index = np.zeros(len(groups), dtype=np.int64)
+    for group, walk in enumerate(_tours(blueprint)):
+        mine = np.flatnonzero(groups == group) if len(walk) else []
+        away = walk[None] - frame[mine, None]
+        index[mine] = np.argmin(np.hypot(away[..., 0], away[..., 1]), axis=1)
+    return index
+
+
+@functools.lru_cache(maxsize=4)
+def _tours(blueprint: Blueprint) -> tuple[np.ndarray, ...]:
+    """Per group, its tour (see `tour`): the rim cells by their angle round the rim's mean
+    cell, nearer ones first at one angle."""
+    tours = []
+    for shape, (low, depths) in zip(blueprint.cells, _depths(blueprint), strict=True):
+        rim = shape[depths[shape[:, 0] - low[0], shape[:, 1] - low[1]] == 1]
+        away = rim - rim.mean(axis=0) if len(rim) else rim
+        tours.append(rim[np.lexsort((np.hypot(*away.T), np.arctan2(away[:, 1], away[:, 0])))])
+    return tuple(tours)
