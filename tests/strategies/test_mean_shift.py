@@ -87,6 +87,18 @@ def test_a_robot_beside_a_full_piece_goes_round_to_a_piece_no_robot_senses():
     assert swarm.overlap_total == 0
 
 
+def test_robots_outside_never_count_on_a_way_past_seeds_they_do_not_sense():
+    """Two robots below the seeds, the one empty cell in reach past them: a seed beyond a
+    robot's senses counted as free, so each step opened a way past the seeds that the next
+    shut, and the two swapped places for ever (a random bitmap of the property test)."""
+    rows = ["000111", "110110", "100000", "100011", "010010"]
+    grid = np.array([[c == "1" for c in row] for row in rows])
+    swarm = make_swarm(grid, agents=12, seed=3523526678, strategy="mean-shift")
+    swarm = run(swarm, max_steps=3000)
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0
+
+
 SLOTS = np.ones((7, 7), dtype=bool)
 SLOTS[2:5, 1] = SLOTS[1:6, 3] = False
 """A square round two slots."""

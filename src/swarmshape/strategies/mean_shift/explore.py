@@ -98,12 +98,26 @@ def walkable(view: View, robots: np.ndarray, base: np.ndarray) -> np.ndarray:
     return ndimage.binary_propagation(start, FOUR_WAYS, ~view.taken[robots])
 
 
+def seeded(taken: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """Robots' view squares `taken` ``(k, side, side)`` with the seeds marked too, where each
+    robot's frame cell `frame` ``(k, 2)`` puts them: every robot knows where they stand, sensed
+    or not."""
+    r = taken.shape[1] // 2
+    marked = taken.copy()
+    for seed in SEED_CELLS:
+        at = seed - frame + r
+        near = ((at >= 0) & (at <= 2 * r)).all(axis=1)
+        marked[np.flatnonzero(near), at[near, 0], at[near, 1]] = True
+    return marked
+
+
 def nearer(
     taken: np.ndarray, base: np.ndarray, free: np.ndarray, offsets: np.ndarray
 ) -> np.ndarray:
     """``(n, 4)``: for each robot, the moves from its base that bring it a cell nearer, through
-    cells it does not sense `taken` (its `View` square), to the nearest of its `free` cells
-    ``(n, k)`` at window `offsets`
+    cells not `taken` (its `View` square, `seeded`: a seed beyond its senses, taken for free,
+    opened a way round the seeds that it shut again a step later, and two robots swapped
+    places for ever), to the nearest of its `free` cells ``(n, k)`` at window `offsets`
     (none when it can reach none). A robot outside its shape takes one of these, so each of its
     moves brings it nearer an empty cell: straight toward the mean of the cells, round a
     robot standing still (stalled, say), it would step aside and back for ever."""
