@@ -82,7 +82,9 @@ def tour(
     cells = np.zeros((len(groups), 2), dtype=np.int64)
     length = np.zeros(len(groups), dtype=np.int64)
     for group, walk in enumerate(_tours(blueprint)):
-        mine = np.flatnonzero(groups == group) if len(walk) else []
+        if not len(walk):  # a group left with no cells
+            continue
+        mine = np.flatnonzero(groups == group)
         cells[mine] = walk[index[mine] % len(walk)]
         length[mine] = len(walk)
     return cells, length
@@ -93,7 +95,9 @@ def nearest_on_tour(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray)
     cell ``(n, 2)``."""
     index = np.zeros(len(groups), dtype=np.int64)
     for group, walk in enumerate(_tours(blueprint)):
-        mine = np.flatnonzero(groups == group) if len(walk) else []
+        if not len(walk):
+            continue
+        mine = np.flatnonzero(groups == group)
         away = walk[None] - frame[mine, None]
         index[mine] = np.argmin(np.hypot(away[..., 0], away[..., 1]), axis=1)
     return index
