@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import numpy.typing as npt
-from numba import njit
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.motion import STEPS, TOUCH
 
 DENSE_LIMIT = 40
@@ -48,7 +48,7 @@ def new_scratch(size: tuple[int, int]) -> np.ndarray:
     return np.full((size[0] + 2) * (size[1] + 2), -1, dtype=np.int64)
 
 
-@njit(cache=True)
+@njit
 def _shared_cell_pairs(
     cell: np.ndarray, direction: np.ndarray, offset: np.ndarray, present: np.ndarray,
     seeds: np.ndarray, stride: int, first: np.ndarray,

@@ -22,14 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-from scipy import ndimage
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import (
-    breadth_first_order,
-    maximum_bipartite_matching,
-    maximum_flow,
-    shortest_path,
-)
+import scipy
 
 if TYPE_CHECKING:
     from swarmshape.core.motion import Limits
@@ -119,7 +112,8 @@ def bottleneck_bound(
         if spent > budget_seconds:
             return Bound(float(lower), method, False)
         graph, source, sink = _threshold_network(starts, targets, probe)
-        if maximum_flow(graph, source, sink, method="dinic").flow_value == len(targets):
+        flow = scipy.sparse.csgraph.maximum_flow(graph, source, sink, method="dinic")
+        if flow.flow_value == len(targets):
             feasible_at = probe
         else:
             lower, method = probe + 1, "hall+cut"
@@ -160,7 +154,9 @@ def _hall_bound(starts: np.ndarray, targets: np.ndarray) -> int:
     )
     if not grids:
         return lower
-    depth = frame.at(ndimage.distance_transform_cdt(frame.mask(targets), metric="taxicab"), targets)
+    depth = frame.at(
+        scipy.ndimage.distance_transform_cdt(frame.mask(targets), metric="taxicab"), targets
+    )
     u_r, u_t = _rotated(starts), _rotated(targets)
     families: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = [
         (u_t, depth, u_r, 0),
@@ -226,7 +222,7 @@ def _best_within(src: np.ndarray, values: np.ndarray, dst: np.ndarray, d: int) -
     keep = ((src >= grid_lo) & (src <= grid_hi)).all(axis=1)
     at = src[keep] - grid_lo
     np.maximum.at(grid, (at[:, 0], at[:, 1]), values[keep].astype(np.int32))
-    best = ndimage.maximum_filter(grid, size=2 * d + 1, mode="constant", cval=_NONE)
+    best = scipy.ndimage.maximum_filter(grid, size=2 * d + 1, mode="constant", cval=_NONE)
     wanted = ((dst >= lo) & (dst <= hi)).all(axis=1)
     at = dst[wanted] - grid_lo
     out[wanted] = best[at[:, 0], at[:, 1]]
@@ -243,7 +239,7 @@ def _flow_seconds(starts: np.ndarray, targets: np.ndarray) -> float:
 
 def _threshold_network(
     starts: np.ndarray, targets: np.ndarray, d: int
-) -> tuple[csr_matrix, int, int]:
+) -> tuple[scipy.sparse.csr_matrix, int, int]:
     """A flow network whose max flow is the largest matching of pairs within distance `d`.
 
     The pair graph is dense (each target sees thousands of robots), so it is never built. In
@@ -289,7 +285,7 @@ def _threshold_network(
     capacity = np.full(len(tail), m, dtype=np.int32)
     capacity[: n + m] = 1
     nodes = table2 + size2
-    return csr_matrix((capacity, (tail, head)), shape=(nodes, nodes)), source, sink
+    return scipy.sparse.csr_matrix((capacity, (tail, head)), shape=(nodes, nodes)), source, sink
 
 
 def _fan_out(
@@ -447,7 +443,7 @@ def _start_potential(
         candidates.append((-_l1(starts - centre), -_l1(targets - centre)))
         frame = _Frame.around(starts, targets)
         if frame.cells <= GRID_LIMIT:
-            depth = ndimage.distance_transform_cdt(frame.mask(targets), metric="taxicab")
+            depth = scipy.ndimage.distance_transform_cdt(frame.mask(targets), metric="taxicab")
             depth = frame.at(depth, targets)
             core, transforms = 1, budget_seconds / (CELL_SECONDS * frame.cells)
             while core <= depth.max() and transforms >= 1:
@@ -548,9 +544,10 @@ def _deficient_set(adjacency: np.ndarray, *, from_targets: bool) -> tuple[np.nda
     its greedy start nearly maximum (10 to 30 times faster again)."""
     rows = np.argsort(adjacency.sum(axis=1), kind="stable")
     cols = np.argsort(adjacency.sum(axis=0), kind="stable")
-    graph = csr_matrix(adjacency[rows][:, cols])
+    graph = scipy.sparse.csr_matrix(adjacency[rows][:, cols])
     robots, targets = adjacency.shape
-    match = maximum_bipartite_matching(graph, perm_type="column")  # robot -> target, sorted
+    # robot -> target, sorted
+    match = scipy.sparse.csgraph.maximum_bipartite_matching(graph, perm_type="column")
     matched = np.flatnonzero(match >= 0)
     owner = np.full(targets, -1)
     owner[match[matched]] = matched
@@ -571,9 +568,12 @@ def _deficient_set(adjacency: np.ndarray, *, from_targets: bool) -> tuple[np.nda
     if len(free) == 0:
         return chosen, 0
     tail, head = np.concatenate(tails), np.concatenate(heads)
-    arcs = csr_matrix((np.ones(len(tail), np.int8), (tail, head)), shape=(root + 1, root + 1))
+    arcs = scipy.sparse.csr_matrix(
+        (np.ones(len(tail), np.int8), (tail, head)), shape=(root + 1, root + 1)
+    )
     reached = np.zeros(root + 1, bool)
-    reached[breadth_first_order(arcs, root, directed=True, return_predecessors=False)] = True
+    seen = scipy.sparse.csgraph.breadth_first_order(arcs, root, return_predecessors=False)
+    reached[seen] = True
     chosen[order] = reached[side]
     return chosen, len(free)
 
@@ -685,7 +685,7 @@ class _TimeExpansion:
         self.targets = index[targets[:, 0] * height + targets[:, 1]]
         self.from_starts = self._hops(self.starts)
         self.to_targets = self._hops(self.targets)
-        labels, _ = ndimage.label(passable)
+        labels, _ = scipy.ndimage.label(passable)
         robots = np.bincount(labels[starts[:, 0], starts[:, 1]], minlength=labels.max() + 1)
         wanted = np.bincount(labels[targets[:, 0], targets[:, 1]], minlength=labels.max() + 1)
         if (wanted > robots).any():
@@ -696,8 +696,11 @@ class _TimeExpansion:
         root = self.size
         tail = np.concatenate([self.tail, np.full(len(sources), root)])
         head = np.concatenate([self.head, sources])
-        graph = csr_matrix((np.ones(len(tail)), (tail, head)), shape=(root + 1, root + 1))
-        hops = shortest_path(graph, indices=root, unweighted=True)[: self.size] - 1
+        graph = scipy.sparse.csr_matrix(
+            (np.ones(len(tail)), (tail, head)), shape=(root + 1, root + 1)
+        )
+        hops = scipy.sparse.csgraph.shortest_path(graph, indices=root, unweighted=True)
+        hops = hops[: self.size] - 1
         return np.where(np.isfinite(hops), hops, np.iinfo(np.int32).max).astype(np.int64)
 
     def lower_bound(self) -> int:
@@ -740,8 +743,11 @@ class _TimeExpansion:
         tail, head = np.concatenate(tails), np.concatenate(heads)
         capacity = np.ones(len(tail), np.int32)
         capacity[-2:] = m, n - m
-        graph = csr_matrix((capacity, (tail, head)), shape=(2 * count + 4, 2 * count + 4))
-        return maximum_flow(graph, source, sink, method="dinic").flow_value == n
+        graph = scipy.sparse.csr_matrix(
+            (capacity, (tail, head)), shape=(2 * count + 4, 2 * count + 4)
+        )
+        flow = scipy.sparse.csgraph.maximum_flow(graph, source, sink, method="dinic")
+        return flow.flow_value == n
 
 
 # --- shared helpers --------------------------------------------------------------------------
@@ -801,7 +807,7 @@ class _Frame:
     def distance_to(self, cells: np.ndarray) -> np.ndarray:
         """L1 distance from every cell of the box to the nearest of `cells`: the taxicab
         chamfer transform is exact on an open grid."""
-        return ndimage.distance_transform_cdt(~self.mask(cells), metric="taxicab")
+        return scipy.ndimage.distance_transform_cdt(~self.mask(cells), metric="taxicab")
 
 
 def _to_shape(starts: np.ndarray, targets: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 KEPT = 0.5
 """Least IoU between a picture and its shape scaled back up to it for the shape to keep the
@@ -164,7 +164,7 @@ def _parts(
 ) -> np.ndarray:
     """Labels of `image`'s connected parts (with `hole`, only those off the border), scaled
     to `shape`."""
-    labels, _ = ndimage.label(image, structure)
+    labels, _ = scipy.ndimage.label(image, structure)
     if hole:
         border = np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])
         labels[np.isin(labels, border)] = 0

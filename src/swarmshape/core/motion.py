@@ -13,8 +13,8 @@ from enum import Enum
 
 import numpy as np
 import numpy.typing as npt
-from numba import njit
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.lattice import FREE
 from swarmshape.core.options import checked, option
 from swarmshape.errors import SettingError
@@ -94,7 +94,7 @@ def step_sizes(
     return _step_sizes(speed, room, pace, limits.max_speed, limits.max_accel)
 
 
-@njit(cache=True)
+@njit
 def _step_sizes(
     speed: np.ndarray, room: np.ndarray, pace: np.ndarray, top: float, a: float
 ) -> npt.NDArray[np.float64]:  # pragma: no cover (compiled)
@@ -104,7 +104,7 @@ def _step_sizes(
     return out
 
 
-@njit(cache=True)
+@njit
 def _step_size(speed: float, room: float, top: float, a: float) -> float:  # pragma: no cover
     """One robot's step (see `step_sizes`)."""
     # the largest v whose braking run v + (v - a) + (v - 2a) + ... still fits in `room`
@@ -113,7 +113,7 @@ def _step_size(speed: float, room: float, top: float, a: float) -> float:  # pra
     return min(top, speed + a, stop_cap, room)
 
 
-@njit(cache=True)
+@njit
 def move(
     cell: np.ndarray, direction: np.ndarray, ahead: np.ndarray, offset: np.ndarray,
     speed: np.ndarray, distance: np.ndarray, pace: np.ndarray, leader: np.ndarray,
@@ -149,7 +149,7 @@ def move(
             offset[r], speed[r] = 0.0, 0.0
 
 
-@njit(cache=True)
+@njit
 def follow(
     cell: np.ndarray, direction: np.ndarray, offset: np.ndarray, speed: np.ndarray,
     pace: np.ndarray, leader: np.ndarray, room: np.ndarray, step: np.ndarray, top: float,
@@ -210,7 +210,7 @@ def resolve_claims(keys: np.ndarray, rng: np.random.Generator, scratch: np.ndarr
     return _first_claims(keys, rng.permutation(len(keys)), scratch)
 
 
-@njit(cache=True)
+@njit
 def _first_claims(
     keys: np.ndarray, shuffled: np.ndarray, scratch: np.ndarray
 ) -> npt.NDArray[np.bool_]:  # pragma: no cover (compiled)

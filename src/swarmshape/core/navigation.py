@@ -13,8 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
+import scipy
 
 from swarmshape.core.motion import STEPS, inside, rows
 from swarmshape.core.snapshot import Snapshot
@@ -109,9 +108,11 @@ class FieldPlanner:
         )
         flat = passable.ravel()
         a, b = edges[flat[edges[:, 0]] & flat[edges[:, 1]]].T
-        graph = sparse.csr_matrix((np.ones(len(a)), (a, b)), shape=(flat.size, flat.size))
+        graph = scipy.sparse.csr_matrix((np.ones(len(a)), (a, b)), shape=(flat.size, flat.size))
         start = ids[goal[0], goal[1]]
-        distance = csgraph.shortest_path(graph, directed=False, unweighted=True, indices=start)
+        distance = scipy.sparse.csgraph.shortest_path(
+            graph, directed=False, unweighted=True, indices=start
+        )
         return distance.reshape(passable.shape)
 
     def plan(self, agent: int, cell: np.ndarray, goal: np.ndarray, views: list[np.ndarray]) -> None:

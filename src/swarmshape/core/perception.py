@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
-from numba import njit
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.options import checked, option
 from swarmshape.core.shape import Pose
 
@@ -188,7 +188,7 @@ def neighbours(
     return _neighbours(cell, seeds, size[0], size[1], reach, here)
 
 
-@njit(cache=True)
+@njit
 def _neighbours(
     cell: np.ndarray, seeds: np.ndarray, width: int, height: int, reach: np.ndarray,
     here: np.ndarray,

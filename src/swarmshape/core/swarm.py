@@ -15,10 +15,10 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
-from numba import njit
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.audit import new_scratch, overlaps
+from swarmshape.core.compiled import njit
 from swarmshape.core.faults import Faults
 from swarmshape.core.guard import PluginCode
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
@@ -762,7 +762,7 @@ class Swarm:
         width, height = self.world.size
         owner = self.lattice.owner.reshape(width + 2, height + 2)[1:-1, 1:-1]
         passable = ~stalled & (grid != SEED) & ((owner < 0) | (owner == group))
-        labels, count = ndimage.label(passable)
+        labels, count = scipy.ndimage.label(passable)
         cells = self.cell[self._mobile() & (self.group == group)]
         reached = np.zeros(count + 1, dtype=bool)
         reached[labels[cells[:, 0], cells[:, 1]]] = True
@@ -774,7 +774,7 @@ class Swarm:
         return (self.state != LOST) & (self.state != STALLED)
 
 
-@njit(cache=True)
+@njit
 def _followable(
     keys: np.ndarray, directions: np.ndarray, holder: np.ndarray, queued: np.ndarray,
     ahead: np.ndarray, direction: np.ndarray, cell: np.ndarray, stride: int,

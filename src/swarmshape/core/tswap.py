@@ -18,8 +18,8 @@ from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
-from numba import njit
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.motion import rows
 
 
@@ -33,7 +33,7 @@ def ring_members(waiting: np.ndarray, waited_for: np.ndarray, robots: int) -> np
     return _on_rings(waiting, waited_for, robots)
 
 
-@njit(cache=True)
+@njit
 def _on_rings(
     waiting: np.ndarray, waited_for: np.ndarray, robots: int
 ) -> npt.NDArray[np.intp]:  # pragma: no cover (compiled)

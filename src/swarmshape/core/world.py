@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.shape import MAX_ARENA_CELLS, SEED_CELLS, Pose, Shape, frozen
 from swarmshape.core.snapshot import Snapshot, prefixed
@@ -187,14 +187,14 @@ class World:
             cells = self.targets[mine] - (self.targets[mine].min(axis=0) - 1)
             inside = np.zeros(tuple(cells.max(axis=0) + 2), dtype=bool)
             inside[cells[:, 0], cells[:, 1]] = True
-            field = ndimage.distance_transform_cdt(inside, metric="taxicab")
+            field = scipy.ndimage.distance_transform_cdt(inside, metric="taxicab")
             depth[mine] = field[cells[:, 0], cells[:, 1]]
         return depth
 
     def outside(self) -> np.ndarray:
         """Free cells connected to the arena border: where agents can come from."""
         free = ~(self.mask(self.targets) | self.mask(self.seeds))
-        labels, count = ndimage.label(free)
+        labels, count = scipy.ndimage.label(free)
         reached = np.zeros(count + 1, dtype=bool)
         reached[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
         reached[0] = False  # not free
@@ -203,7 +203,7 @@ class World:
     def start_mask(self) -> np.ndarray:
         """Per arena cell, whether agents may start there: outside, and not touching a target
         or a seed."""
-        placed = ndimage.binary_dilation(
+        placed = scipy.ndimage.binary_dilation(
             self.mask(self.targets) | self.mask(self.seeds), structure=np.ones((3, 3))
         )
         return self.outside() & ~placed

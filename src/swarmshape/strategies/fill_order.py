@@ -10,8 +10,7 @@ from __future__ import annotations
 import heapq
 
 import numpy as np
-from scipy import ndimage, sparse
-from scipy.sparse import csgraph
+import scipy
 
 from swarmshape.core.motion import STEPS
 from swarmshape.core.world import World, WorldError
@@ -52,18 +51,18 @@ def _outward_distance(cells: np.ndarray, seeds: np.ndarray) -> np.ndarray:
     """
     graph = _adjacency(cells)
     to_seeds = np.abs(cells[:, None, :] - seeds[None, :, :]).sum(axis=2).min(axis=1)
-    _, part = csgraph.connected_components(graph, directed=False)
+    _, part = scipy.sparse.csgraph.connected_components(graph, directed=False)
     starts = [np.flatnonzero(part == p)[np.argmin(to_seeds[part == p])] for p in np.unique(part)]
     # one extra node (index k) that reaches each part's start at that start's seed distance
     k = len(cells)
-    extra = sparse.coo_matrix(
+    extra = scipy.sparse.coo_matrix(
         (to_seeds[starts] + 1.0, (np.full(len(starts), k), starts)), shape=(k + 1, k + 1)
     )
-    full = sparse.block_diag([graph, sparse.csr_matrix((1, 1))]) + extra
-    return csgraph.dijkstra(full, directed=True, indices=k)[:k]
+    full = scipy.sparse.block_diag([graph, scipy.sparse.csr_matrix((1, 1))]) + extra
+    return scipy.sparse.csgraph.dijkstra(full, directed=True, indices=k)[:k]
 
 
-def _adjacency(cells: np.ndarray) -> sparse.csr_matrix:
+def _adjacency(cells: np.ndarray) -> scipy.sparse.csr_matrix:
     """Unit-weight graph joining 4-neighbour cells of the set, both directions."""
     index = {tuple(c): i for i, c in enumerate(cells.tolist())}
     pairs = [
@@ -74,7 +73,7 @@ def _adjacency(cells: np.ndarray) -> sparse.csr_matrix:
     ]
     rows, cols = np.array(pairs, dtype=np.int64).reshape(-1, 2).T
     n = len(cells)
-    upper = sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    upper = scipy.sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
     return (upper + upper.T).tocsr()
 
 
@@ -90,7 +89,7 @@ def safe_sequence(world: World, group: int, rank: np.ndarray) -> np.ndarray:
     others = world.mask(world.seeds) | (world.mask(world.targets) & ~own)
     index = np.full(world.size, -1)
     index[cells[:, 0], cells[:, 1]] = np.arange(len(cells))
-    regions, _ = ndimage.label(~own & ~others)
+    regions, _ = scipy.ndimage.label(~own & ~others)
     width, height = world.size
     border = np.concatenate([regions[0], regions[-1], regions[:, 0], regions[:, -1]])
     opened = set(border[border > 0].tolist())

@@ -16,7 +16,7 @@ import functools
 from typing import ClassVar
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
@@ -614,8 +614,8 @@ def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         size = cells.max(axis=0) - low + 2 if len(cells) else np.ones(2, dtype=np.int64)
         grid = np.zeros(size, dtype=bool)
         grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
-        inside = ndimage.binary_fill_holes(grid)
-        depth = ndimage.distance_transform_cdt(inside, metric="taxicab")
+        inside = scipy.ndimage.binary_fill_holes(grid)
+        depth = scipy.ndimage.distance_transform_cdt(inside, metric="taxicab")
         out.append((low, np.where(grid, depth, 0)))
     return tuple(out)
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.messages import SEEDS
 from swarmshape.core.motion import STEPS, Motion
@@ -156,7 +156,7 @@ class Paper(Strategy):
         others = world.targets[world.target_group != group]
         passable[others[:, 0], others[:, 1]] = False
         passable[swarm.cells[idle, 0], swarm.cells[idle, 1]] = True
-        labels, _ = ndimage.label(passable)
+        labels, _ = scipy.ndimage.label(passable)
         reached = np.unique(labels[swarm.cells[idle, 0], swarm.cells[idle, 1]])
         cells = swarm.targets[open_cells]
         reachable = np.isin(labels[cells[:, 0], cells[:, 1]], reached)
@@ -186,7 +186,7 @@ class Paper(Strategy):
         front, level = free, 0
         while front.any():
             level += 1
-            grown = ndimage.binary_dilation(front) & settled & (distance > level)
+            grown = scipy.ndimage.binary_dilation(front) & settled & (distance > level)
             distance[grown] = level
             front = grown
         best, choice = np.iinfo(np.int64).max, (-1, -1)

@@ -14,9 +14,7 @@ import functools
 from collections.abc import Iterator
 
 import numpy as np
-from scipy import ndimage
-from scipy.sparse import coo_matrix, csr_matrix
-from scipy.sparse.csgraph import dijkstra
+import scipy
 
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint
@@ -110,11 +108,11 @@ def _fewest_crossed(blueprint: Blueprint, group: int) -> np.ndarray:
     walls = np.zeros(size, dtype=bool)
     for cells in (blueprint.cells[group], SEED_CELLS):
         walls[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
-    return ndimage.distance_transform_cdt(walls, metric="taxicab")
+    return scipy.ndimage.distance_transform_cdt(walls, metric="taxicab")
 
 
 @functools.lru_cache(maxsize=16)
-def _moves(blueprint: Blueprint, group: int) -> tuple[csr_matrix, np.ndarray]:
+def _moves(blueprint: Blueprint, group: int) -> tuple[scipy.sparse.csr_matrix, np.ndarray]:
     """The moves a route may take, as a weighted graph over the box's cells, reversed (from
     the target out): a step onto a free cell costs 1, onto a shape cell more than any way
     round through free cells, so a route crosses as few shape cells as it can. Seeds are
@@ -138,7 +136,9 @@ def _moves(blueprint: Blueprint, group: int) -> tuple[csr_matrix, np.ndarray]:
             sinks.append(other[ok])
             weights.append(cost[one[ok]])  # a robot steps from `other` into `one`
     sources, sinks = np.concatenate(sources), np.concatenate(sinks)
-    matrix = coo_matrix((np.concatenate(weights), (sources, sinks)), shape=(shape.size,) * 2)
+    matrix = scipy.sparse.coo_matrix(
+        (np.concatenate(weights), (sources, sinks)), shape=(shape.size,) * 2
+    )
     return matrix.tocsr(), cost
 
 
@@ -153,4 +153,4 @@ def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
         return np.full(tuple(size), np.inf)
     graph, cost = _moves(blueprint, group)
     start = int(local[0] * size[1] + local[1])
-    return (dijkstra(graph, indices=start) + cost).reshape(tuple(size))
+    return (scipy.sparse.csgraph.dijkstra(graph, indices=start) + cost).reshape(tuple(size))

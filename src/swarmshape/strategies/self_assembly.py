@@ -33,13 +33,14 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.local import Memory, Program, Schema, Slot
 from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
+from swarmshape.strategies.skills.view import SIDES_IN_A_WINDOW
 
 START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
@@ -85,9 +86,6 @@ RIGHT_SIDE = _slot(STEPS[RIGHT])
 """``[d]``: the window slot of the cell on the right of a robot heading d."""
 FRONT_RIGHT = _slot(STEPS + STEPS[RIGHT])
 """``[d]``: the window slot of the cell ahead and to the right of a robot heading d."""
-SIDES_IN_A_WINDOW = np.stack([np.zeros((3, 3), bool), ndimage.generate_binary_structure(2, 1),
-                              np.zeros((3, 3), bool)])  # fmt: skip
-"""Cells that share a side, within one robot's window of a stack of windows."""
 
 
 @register
@@ -518,7 +516,7 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     free[:, 2, 2] = False
     start = np.zeros((a, 5, 5), dtype=bool)
     start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
-    reach = ndimage.binary_propagation(start & free, structure=SIDES_IN_A_WINDOW, mask=free)
+    reach = scipy.ndimage.binary_propagation(start & free, structure=SIDES_IN_A_WINDOW, mask=free)
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
 

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 import pygame
+import scipy
 from PIL import Image
-from scipy import ndimage
 
 from swarmshape.config import bundled_shapes
 from swarmshape.core.shape import SEED_CELLS, Pose, Shape
@@ -107,7 +107,7 @@ class Canvas:
         """Flip the region of equal cells around `cell` (4-connected): ink becomes empty, and
         an empty region becomes ink."""
         same = self.grid == self.grid[cell]
-        labels, _ = ndimage.label(same & ~self.blocked)
+        labels, _ = scipy.ndimage.label(same & ~self.blocked)
         if labels[cell]:
             self.grid[labels == labels[cell]] = not self.grid[cell]
 

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.motion import LEFT, STEPS
 from swarmshape.core.perception import Blueprint, Senses
@@ -90,8 +90,8 @@ class Fields:
             low = cells.min(axis=0) - 1
             grid = np.zeros(cells.max(axis=0) - low + 2, dtype=bool)
             grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = True
-            depth = ndimage.distance_transform_cdt(grid, metric="taxicab")
-            outside = ndimage.distance_transform_cdt(~grid, metric="taxicab")
+            depth = scipy.ndimage.distance_transform_cdt(grid, metric="taxicab")
+            outside = scipy.ndimage.distance_transform_cdt(~grid, metric="taxicab")
             boxes.append((low, np.where(grid, depth, -outside).astype(np.int64)))
         return cls(tuple(boxes))
 

@@ -23,16 +23,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import SEED_CELLS
-from swarmshape.strategies.skills.view import View
-
-FOUR_WAYS = np.zeros((3, 3, 3), dtype=bool)
-FOUR_WAYS[1] = ndimage.generate_binary_structure(2, 1)
-"""Neighbours four ways within one robot's square, never across robots."""
+from swarmshape.strategies.skills.view import SIDES_IN_A_WINDOW, View
 
 
 def base(sense: Perception) -> np.ndarray:
@@ -95,7 +91,7 @@ def walkable(view: View, robots: np.ndarray, base: np.ndarray) -> np.ndarray:
     r = view.reach
     start = np.zeros((len(robots), *view.taken.shape[1:]), dtype=bool)
     start[np.arange(len(robots)), base[:, 0] + r, base[:, 1] + r] = True
-    return ndimage.binary_propagation(start, FOUR_WAYS, ~view.taken[robots])
+    return scipy.ndimage.binary_propagation(start, SIDES_IN_A_WINDOW, ~view.taken[robots])
 
 
 def seeded(taken: np.ndarray, frame: np.ndarray) -> np.ndarray:
@@ -130,7 +126,7 @@ def nearer(
     front, reached, d = goal, goal, 0
     while front.any():
         d += 1
-        front = ndimage.binary_dilation(front, FOUR_WAYS) & passable & ~reached
+        front = scipy.ndimage.binary_dilation(front, SIDES_IN_A_WINDOW) & passable & ~reached
         distance[front] = d
         reached = reached | front
     rows = np.arange(n)
@@ -185,7 +181,7 @@ def _grey_fields(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], .
         reached, distance = front.copy(), 0
         while front.any():
             level[front] = distance
-            grown = ndimage.binary_dilation(front) & ~reached & ~seeds
+            grown = scipy.ndimage.binary_dilation(front) & ~reached & ~seeds
             reached |= grown
             front, distance = grown, distance + 1
         fields.append((low, level))

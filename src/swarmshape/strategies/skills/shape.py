@@ -8,7 +8,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy import ndimage
+import scipy
 
 from swarmshape.core.perception import Blueprint, box_lookup
 from swarmshape.core.shape import SEED_CELLS
@@ -47,7 +47,7 @@ def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         body[shape[:, 0] - low[0], shape[:, 1] - low[1]] = True
         grid = body.copy()
         grid[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
-        depths.append((low, _through(body, ndimage.binary_fill_holes(grid))))
+        depths.append((low, _through(body, scipy.ndimage.binary_fill_holes(grid))))
     return tuple(depths)
 
 
@@ -55,13 +55,13 @@ def _through(shape: np.ndarray, inside: np.ndarray) -> np.ndarray:
     """The depth of each cell of a box (see `depth`): `shape` its shape cells, `inside` those
     and the seeds and pockets. A shape cell walled off from the outside by pockets keeps its
     taxicab depth."""
-    depths = ndimage.distance_transform_cdt(inside, "taxicab")
+    depths = scipy.ndimage.distance_transform_cdt(inside, "taxicab")
     front = shape & (depths == 1)
     reached, level = front.copy(), 1
-    four = ndimage.generate_binary_structure(2, 1)
+    four = scipy.ndimage.generate_binary_structure(2, 1)
     while front.any():
         depths[front] = level
-        front = ndimage.binary_dilation(front, four) & shape & ~reached
+        front = scipy.ndimage.binary_dilation(front, four) & shape & ~reached
         reached |= front
         level += 1
     return depths

@@ -12,6 +12,11 @@ import numpy as np
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 
+SIDES_IN_A_WINDOW = np.zeros((3, 3, 3), dtype=bool)
+SIDES_IN_A_WINDOW[1, 1, :] = SIDES_IN_A_WINDOW[1, :, 1] = True
+"""The structure for scipy.ndimage over a stack of robots' squares (`View.taken`): cells that
+share a side within one robot's square, never across robots."""
+
 
 class View:
     """Per robot, the square of cells within `reach` round its own cell: which hold something
