@@ -62,7 +62,7 @@ class Blueprint:
     cells: tuple[np.ndarray, ...]
     """Per group, its shape's frame cells ``(k, 2)`` in row-major order (the same list every
     robot of the group holds)."""
-    _boxes: tuple[tuple[np.ndarray, np.ndarray], ...] = field(repr=False, default=())
+    _numbers: Boxes = field(repr=False)
 
     @classmethod
     def of(cls, frame_cells: list[np.ndarray]) -> Blueprint:
@@ -73,7 +73,7 @@ class Blueprint:
             grid = np.full(high - low, -1, dtype=np.int64)
             grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = np.arange(len(cells))
             boxes.append((low, grid))
-        return cls(tuple(frame_cells), _boxes=tuple(boxes))
+        return cls(tuple(frame_cells), _numbers=Boxes(boxes))
 
     def count(self, groups: np.ndarray) -> np.ndarray:
         """How many cells the shape of each entry's group has."""
@@ -81,7 +81,7 @@ class Blueprint:
 
     def number(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
         """The number of each frame cell ``(k, 2)`` in its group's shape, or -1 (not in it)."""
-        return box_lookup(self._boxes, groups, frame)
+        return self._numbers.at(groups, frame)
 
     def contains(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
         """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
@@ -96,18 +96,29 @@ class Blueprint:
         return out
 
 
-def box_lookup(
-    boxes: tuple[tuple[np.ndarray, np.ndarray], ...], groups: np.ndarray, frame: np.ndarray
-) -> np.ndarray:
-    """Per frame cell ``(k, 2)``, the value in its group's grid: `boxes` holds per group the
-    frame cell of the grid's corner and the grid, whose one-cell border holds the value for
-    any cell off it (a lookup off the grid is clipped onto the border)."""
-    found = np.zeros(len(frame), dtype=boxes[0][1].dtype if boxes else np.int64)
-    for group, (low, grid) in enumerate(boxes):
-        mine = np.flatnonzero(groups == group) if len(boxes) > 1 else slice(None)
-        local = np.clip(frame[mine] - low, 0, np.array(grid.shape) - 1)
-        found[mine] = grid[local[:, 0], local[:, 1]]
-    return found
+class Boxes:
+    """Per group, a grid of values over a box of its seed frame whose border holds the value of
+    every cell beyond it (depths, cell numbers), looked up for many robots at once.
+
+    The groups' grids are stacked into one array, each padded out with its own border, so a
+    lookup is one clip and one gather whatever the groups: local programs look up cells many
+    times a step, and a loop over groups cost more than all the rest of the lookup."""
+
+    def __init__(self, boxes: list[tuple[np.ndarray, np.ndarray]]) -> None:
+        self.boxes = tuple(boxes)
+        """Per group, the frame cell of its grid's corner and the grid."""
+        size = np.max([grid.shape for _, grid in boxes], axis=0)
+        self.low = np.array([low for low, _ in boxes], dtype=np.int64).reshape(-1, 2)
+        self.grids = np.stack([np.pad(grid, [(0, size[0] - grid.shape[0]),
+                                             (0, size[1] - grid.shape[1])], mode="edge")
+                               for _, grid in boxes])  # fmt: skip
+        self.top = size - 1
+
+    def at(self, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        """The value at each frame cell ``(k, 2)`` in the grid of its entry's group."""
+        local = frame - self.low[groups]
+        np.minimum(np.maximum(local, 0, out=local), self.top, out=local)
+        return self.grids[groups, local[:, 0], local[:, 1]]
 
 
 @dataclass(frozen=True, eq=False)

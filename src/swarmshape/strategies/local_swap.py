@@ -20,7 +20,7 @@ import scipy
 
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
-from swarmshape.core.perception import Blueprint, Perception, box_lookup
+from swarmshape.core.perception import Blueprint, Boxes, Perception
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
 from swarmshape.strategies.skills.relay import best_per_robot
@@ -580,7 +580,7 @@ def _deeper(
     drawn = memory.has_goal & (seeker_hops < FAR)
 
     def value(cells: np.ndarray) -> np.ndarray:
-        inside = box_lookup(depth, sense.group, cells)
+        inside = depth.at(sense.group, cells)
         farther = _apart(cells, seeker) + 1  # 0 stays for outside the shape
         return np.where(inside > 0, np.where(drawn, farther, inside), 0)
 
@@ -600,7 +600,7 @@ def _deeper(
 
 
 @functools.lru_cache(maxsize=4)
-def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+def _depth(blueprint: Blueprint) -> Boxes:
     """Per group, the low corner of its shape's box (less one) and the taxicab distance of
     each cell to the nearest cell outside the shape (0 outside), in a box padded by one. The
     seeds count as inside: no robot comes in past them, and a cell they wall off from the
@@ -617,7 +617,7 @@ def _depth(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         inside = scipy.ndimage.binary_fill_holes(grid)
         depth = scipy.ndimage.distance_transform_cdt(inside, metric="taxicab")
         out.append((low, np.where(grid, depth, 0)))
-    return tuple(out)
+    return Boxes(out)
 
 
 def localise(sense: Perception, memory: Memory) -> None:

@@ -10,7 +10,7 @@ import functools
 import numpy as np
 import scipy
 
-from swarmshape.core.perception import Blueprint, box_lookup
+from swarmshape.core.perception import Blueprint, Boxes
 from swarmshape.core.shape import SEED_CELLS
 
 MARGIN = 2
@@ -25,7 +25,7 @@ def depth(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.nda
     is deep when it lies far from where robots come in. Counted through the shape, every shape
     cell deeper than 1 has a shape cell a step shallower beside it, so a hole carried outward
     never sticks beside a pocket (the horse's one-cell slot held one for good)."""
-    return box_lookup(_depths(blueprint), groups, frame)
+    return _depths(blueprint).at(groups, frame)
 
 
 def enclosed(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
@@ -35,9 +35,9 @@ def enclosed(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.
 
 
 @functools.lru_cache(maxsize=4)
-def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-    """Per group, the depth of each cell as a box for `box_lookup` (the low corner less one,
-    and a grid whose border holds what lies beyond)."""
+def _depths(blueprint: Blueprint) -> Boxes:
+    """Per group, the depth of each cell of a box round its shape (whose border holds what
+    lies beyond)."""
     depths = []
     for shape in blueprint.cells:
         cells = np.concatenate([shape, SEED_CELLS])
@@ -48,7 +48,7 @@ def _depths(blueprint: Blueprint) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         grid = body.copy()
         grid[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
         depths.append((low, _through(body, scipy.ndimage.binary_fill_holes(grid))))
-    return tuple(depths)
+    return Boxes(depths)
 
 
 def _through(shape: np.ndarray, inside: np.ndarray) -> np.ndarray:
@@ -70,7 +70,7 @@ def _through(shape: np.ndarray, inside: np.ndarray) -> np.ndarray:
 @functools.lru_cache(maxsize=4)
 def rim(blueprint: Blueprint) -> int:
     """Cells a walk once round every group's shape passes: its cells beside the outside."""
-    return sum(int((depths == 1).sum()) for _, depths in _depths(blueprint))
+    return sum(int((depths == 1).sum()) for _, depths in _depths(blueprint).boxes)
 
 
 def tour(
@@ -108,7 +108,7 @@ def _tours(blueprint: Blueprint) -> tuple[np.ndarray, ...]:
     """Per group, its tour (see `tour`): the rim cells by their angle round the rim's mean
     cell, nearer ones first at one angle."""
     tours = []
-    for shape, (low, depths) in zip(blueprint.cells, _depths(blueprint), strict=True):
+    for shape, (low, depths) in zip(blueprint.cells, _depths(blueprint).boxes, strict=True):
         rim = shape[depths[shape[:, 0] - low[0], shape[:, 1] - low[1]] == 1]
         away = rim - rim.mean(axis=0) if len(rim) else rim
         tours.append(rim[np.lexsort((np.hypot(*away.T), np.arctan2(away[:, 1], away[:, 0])))])
