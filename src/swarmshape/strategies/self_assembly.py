@@ -21,10 +21,7 @@ alone, and `stopped`, for one that walked round everything without finding a pla
   robot in its way;
 - **joining**: once its estimate lies in the shape, a robot stops for good when its next move
   would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
-  end of the layer being built);
-- **wandering** (ours): a robot with no gradient in reach walks straight on, turning at random
-  now and then and wherever a move fails, until it hears the structure and heads for it (a
-  correlated random walk finds it in under half the steps of one that turns at every move).
+  end of the layer being built).
 
 As in the paper, shapes with holes cannot be formed (the runner warns), and errors in gradient
 and position warp the shape more the farther it grows from the seeds.
@@ -126,13 +123,6 @@ class SelfAssembly(Program):
             "find one",
             at_least=0,
         )
-        wander_run: float = option(
-            24.0,
-            "mean moves a robot looking for the structure goes straight before it turns at "
-            "random (it turns, too, where a move fails); runs of 12 cells to unbounded find it "
-            "alike, in under half the steps of a walk that turns at every move",
-            at_least=1.0,
-        )
 
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
@@ -169,7 +159,7 @@ class SelfAssembly(Program):
             _gradient(view, mine)
             _leave(view, mine, self.options)
             _follow(view, _Where(sense, rows), mine, moved_rows)
-            _wander(view, mine, moved_rows, moved[rows], self.options.wander_run, rng)
+            _wander(view, mine, moved_rows, rng)
             mine.write_back()
             moves[rows] = moved_rows
         messages = MESSAGE.pack(
@@ -530,19 +520,9 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
 
-def _wander(
-    view: _View,
-    memory: Memory,
-    moves: np.ndarray,
-    went: np.ndarray,
-    run: float,
-    rng: np.random.Generator,
-) -> None:
-    """Robots that have not found the structure walk a correlated random walk (as Dimidov,
-    Oriolo and Trianni's Kilobots search, "Random walks in swarm robotics", ANTS 2016): on in
-    the direction of their last move while it `went` through, turning to a random free cell
-    one move in `run` and wherever a move failed (a wall they cannot sense, a robot), and
-    toward the structure when they hear it."""
+def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
+    """Robots that have not found the structure step at random to a free cell, half the
+    time."""
     walking = (memory.state == WANDER) & view.ready & (moves == 0)
     noise = rng.random((len(moves), 5))
     noise[:, 0] = 0.0
@@ -552,8 +532,6 @@ def _wander(
     noise[:, 2] += 2.0 * (bx < 0) + (np.abs(bx) >= np.abs(by)) * (bx < 0)
     noise[:, 3] += 2.0 * (by > 0) + (np.abs(by) > np.abs(bx)) * (by > 0)
     noise[:, 4] += 2.0 * (by < 0) + (np.abs(by) > np.abs(bx)) * (by < 0)
-    straight = went & (rng.random(len(moves)) >= 1.0 / run)
-    noise[straight, memory.heading[straight]] += 1.0
     for d in range(1, 5):
         noise[view.taken[:, AHEAD[d]], d] = -1.0
     choice = noise.argmax(axis=1)
