@@ -159,6 +159,7 @@ class SelfAssembly(Program):
             _gradient(view, mine)
             _leave(view, mine, self.options)
             _follow(view, _Where(sense, rows), mine, moved_rows)
+            _arrive(view, mine, moved_rows)
             _wander(view, mine, moved_rows, rng)
             mine.write_back()
             moves[rows] = moved_rows
@@ -411,6 +412,9 @@ def _leave(view: _View, memory: Memory, options: SelfAssembly.Options) -> None:
     ``options.alone`` steps, or with no neighbour at all, walk off to find the structure."""
     state = memory.state
     waiting = state == WAIT
+    if not waiting.any():  # once the robots have left or wandered off, most steps
+        memory.eligible = np.zeros_like(memory.eligible)
+        return
     first = waiting & (memory.gradient < INFINITE) & ~view.outranked & ~view.mover_near
     heading = _first_heading(view, first)
     first &= heading > 0
@@ -449,6 +453,9 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     rows = np.arange(n)
     going = np.isin(state, (OUTSIDE, INSIDE)) & view.ready
     going &= ~view.unknown[:, NEAR8].any(axis=1)
+    if not going.any():  # while the robots wander or wait, most steps
+        memory.want = np.zeros_like(memory.want)
+        return
     cell = _frame_cell(memory)
     in_shape = memory.localised & sense.blueprint.contains(sense.group, cell)
     state[going & (state == OUTSIDE) & in_shape] = INSIDE
@@ -494,6 +501,11 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     lost = going & ~join & (memory.travelled > limit)
     state[lost] = STOPPED
     moves[lost] = 0
+
+
+def _arrive(view: _View, memory: Memory, moves: np.ndarray) -> None:
+    """Wanderers at rest beside the structure start round it, with it on their right."""
+    state = memory.state
     found = (state == WANDER) & view.ready & ~view.unknown[:, NEAR8].any(axis=1)
     found &= (view.stationary[:, NEAR8] & (view.gradient[:, NEAR8] < INFINITE)).any(axis=1)
     heading = _first_heading(view, found)
