@@ -18,6 +18,7 @@ from typing import ClassVar
 import numpy as np
 import scipy
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
 from swarmshape.core.perception import Blueprint, Boxes, Perception
@@ -720,18 +721,7 @@ def _plan(
     steps = np.full(blocked.shape, -1, dtype=np.int64)
     way = np.zeros(blocked.shape, dtype=np.int64)
     steps[:, reach, reach] = 0
-    for distance in range(1, side * side):
-        grown = False
-        for direction in range(1, len(STEPS)):
-            dx, dy = STEPS[direction]
-            source = _shifted(steps == distance - 1, dx, dy)
-            new = source & ~blocked & (steps < 0)
-            if new.any():
-                grown = True
-                steps[new] = distance
-                way[new] = direction if distance == 1 else _shifted(way, dx, dy)[new]
-        if not grown:
-            break
+    _spread(blocked, steps, way)
     span = np.arange(-reach, reach + 1)
     left = np.abs(delta[rows, 0, None, None] - span[None, :, None])
     left = left + np.abs(delta[rows, 1, None, None] - span[None, None, :])
@@ -745,15 +735,30 @@ def _plan(
     return chosen, np.where(going, first, 0)
 
 
-def _shifted(grid: np.ndarray, dx: int, dy: int) -> np.ndarray:
-    """`grid` ``(k, w, w)`` moved by one cell ``(dx, dy)``, filled with zeros where it came
-    from outside."""
-    out = np.zeros_like(grid)
-    w = grid.shape[1]
-    xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
-    ys, yd = (slice(0, w - dy), slice(dy, w)) if dy >= 0 else (slice(-dy, w), slice(0, w + dy))
-    out[:, xd, yd] = grid[:, xs, ys]
-    return out
+@njit
+def _spread(
+    blocked: np.ndarray, steps: np.ndarray, way: np.ndarray
+) -> None:  # pragma: no cover (compiled)
+    """Breadth-first through each robot's square from where `steps` is 0, round the `blocked`
+    cells: each cell reached gets its `steps` and the `way` of the first step to it (of equal
+    paths, the one whose first step comes first in move order)."""
+    side = blocked.shape[1]
+    for r in range(blocked.shape[0]):
+        distance, grown = 0, True
+        while grown:
+            distance, grown = distance + 1, False
+            for direction in range(1, 5):
+                dx, dy = STEPS[direction, 0], STEPS[direction, 1]
+                for x in range(max(0, -dx), min(side, side - dx)):
+                    for y in range(max(0, -dy), min(side, side - dy)):
+                        if steps[r, x, y] != distance - 1:
+                            continue
+                        tx, ty = x + dx, y + dy
+                        if blocked[r, tx, ty] or steps[r, tx, ty] >= 0:
+                            continue
+                        steps[r, tx, ty] = distance
+                        way[r, tx, ty] = direction if distance == 1 else way[r, x, y]
+                        grown = True
 
 
 def _go_round(
