@@ -31,8 +31,11 @@ class View:
         self.cells = np.rint(sense.offset + own[sense.owner]).astype(np.int64)
         """Each entry's cell relative to its robot's own cell."""
         side = 2 * r + 1
-        self.taken = np.zeros((n, side, side), dtype=bool)
-        self.who = np.full((n, side, side), -1, dtype=np.int64)
+        # the squares inside a border of free cells, where a look beyond them lands (`at`)
+        self._taken = np.zeros((n, side + 2, side + 2), dtype=bool)
+        self._who = np.full((n, side + 2, side + 2), -1, dtype=np.int64)
+        self.taken = self._taken[:, 1:-1, 1:-1]
+        self.who = self._who[:, 1:-1, 1:-1]
         entries = np.arange(len(sense.owner))
         near = (np.abs(self.cells) <= r).all(axis=1)
         self._mark(sense.owner[near], self.cells[near], entries[near])
@@ -50,11 +53,6 @@ class View:
     def at(self, robots: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each robot senses something on a cell relative to its own, and the entry of
         the neighbour there (-1: none). Cells beyond its window are free as far as it knows."""
-        r = self.reach
-        inside = (np.abs(cells) <= r).all(axis=1)
-        taken = np.zeros(len(robots), dtype=bool)
-        who = np.full(len(robots), -1, dtype=np.int64)
-        x, y = cells[inside, 0] + r, cells[inside, 1] + r
-        taken[inside] = self.taken[robots[inside], x, y]
-        who[inside] = self.who[robots[inside], x, y]
-        return taken, who
+        at = cells + (self.reach + 1)
+        np.minimum(np.maximum(at, 0, out=at), 2 * self.reach + 2, out=at)
+        return self._taken[robots, at[:, 0], at[:, 1]], self._who[robots, at[:, 0], at[:, 1]]
