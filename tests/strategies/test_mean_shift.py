@@ -11,14 +11,19 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from swarmshape.config import configure
+from swarmshape.core.faults import FaultEvent, Faults
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint
 from swarmshape.core.shape import Shape
+from swarmshape.core.states import STALLED
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import build, load_world, run, start_swarm
+from swarmshape.strategies import create
 from swarmshape.strategies.mean_shift import IN_PLACE
 from swarmshape.strategies.skills import shape as skills
-from tests.conftest import SHAPES, make_swarm
+from tests.conftest import SHAPES, grid_from, make_swarm
 
 
 def formed(shape: str, max_steps: int = 3000, **settings):
@@ -95,6 +100,19 @@ def test_robots_outside_never_count_on_a_way_past_seeds_they_do_not_sense():
     grid = np.array([[c == "1" for c in row] for row in rows])
     swarm = make_swarm(grid, agents=12, seed=3523526678, strategy="mean-shift")
     swarm = run(swarm, max_steps=3000)
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0
+
+
+def test_a_robot_following_news_goes_round_a_stalled_robot_in_its_way():
+    """A property test's run: three robots stall at step 84, one of them on the straight way
+    of a robot following news of an empty cell round the shape, which waited behind it for
+    good (a stalled robot is silent, and never makes way)."""
+    grid = grid_from("###.. ...#. ..#.# #....")
+    world = build_world([GroupSpec("g", Shape(grid), (1, 2, 3), int(grid.sum()))])
+    faults = Faults((FaultEvent(84, "stall", 0.4438385442748267),))
+    swarm = run(Swarm(world, create("mean-shift"), 0, faults=faults), max_steps=700)
+    assert (swarm.state == STALLED).sum() == 3
     assert swarm.complete, run_metrics(swarm)
     assert swarm.overlap_total == 0
 

@@ -177,10 +177,12 @@ class MeanShift(Program):
         goal = np.where(heard[rows, None], memory.news[rows], shape.tour(
             blueprint, group[rows], memory.tour[rows])[0])  # fmt: skip
         way, found = routes.waypoints(blueprint, group[rows], base[rows], goal, int(sense.radius))
-        rows = rows[found]
-        command[rows] = options.entering * explore.unit(way[found] - base[rows])
-        rows = np.flatnonzero(outside & sees)
+        rows, way = rows[found], way[found]
+        command[rows] = options.entering * explore.unit(way - base[rows])
         toward = np.zeros((len(sense), len(STEPS) - 1), dtype=bool)
+        if options.entering > 0:
+            toward[rows] = explore.round_the_silent(sense, view, window, frame[rows], rows, way)
+        rows = np.flatnonzero(outside & sees)
         walls = explore.seeded(view.taken[rows], frame[rows])
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
         pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)

@@ -140,6 +140,26 @@ def nearer(
     return np.stack(steps, axis=1)
 
 
+def round_the_silent(
+    sense: Perception,
+    view: View,
+    window: Window,
+    frame: np.ndarray,
+    robots: np.ndarray,
+    way: np.ndarray,
+) -> np.ndarray:
+    """``(k, 4)``: for `robots` on frame cells `frame` following a route round the shape to
+    its next waypoint `way`, the moves that bring each nearer the waypoint round the silent
+    robots it senses (stalled: they never make way, and a robot whose straight way one blocked
+    waited behind it for good) and the seeds; none when the waypoint lies beyond its window.
+    Robots that talk are left to make way."""
+    entry = np.maximum(view.who[robots], 0)
+    silent = (view.who[robots] >= 0) & ~sense.heard[entry] & ~sense.seed[entry]
+    goal = (window.offsets[None] == (way - frame)[:, None]).all(axis=2)
+    walls = seeded(silent, frame)
+    return nearer(walls, base(sense)[robots], goal, window.offsets)
+
+
 def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:
     """Per robot on frame cell `cells`, its entering command ``(n, 2)``: the unit vector along
     the moves that lower its grey level (one step nearer the shape), times
