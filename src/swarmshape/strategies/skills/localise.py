@@ -61,7 +61,30 @@ def localise(sense: Perception, memory: Memory, said: SimpleNamespace) -> None:
     first = relay.best_per_robot(len(sense), owner, np.zeros(len(usable)), usable)
     found = first >= 0
     memory.frame[found] = cells[first[found]]
+    _recheck(sense, memory, cells, whole & (kin & sense.seed | robot & (said.stays == 1)))
     memory.localised |= found
+
+
+def _recheck(sense: Perception, memory: Memory, cells: np.ndarray, still: np.ndarray) -> None:
+    """A localised robot at rest takes the cell most of its seeds and localised neighbours at
+    rest put it on (`cells`, per entry, where `still`), when more of them say so than say it is
+    where it thinks. A fix from a neighbour that turned as it was heard can come out a cell
+    off, and the robots that fix theirs from it inherit the error: six robots round a hole of
+    the noisy star each held a cell one off, counted the hole as filled and never carried it
+    out. At rest with neighbours at rest the reading is exact, so without noise no robot moves
+    its cell."""
+    owner = sense.owner
+    at_rest = memory.localised & sense.ready
+    votes = still & at_rest[owner]
+    off = cells - memory.frame[owner]
+    near = votes & (np.abs(off) <= 2).all(axis=1)
+    code = (off[:, 0] + 2) * 5 + off[:, 1] + 2
+    counts = np.bincount(owner[near] * 25 + code[near], minlength=len(sense) * 25)
+    counts = counts.reshape(len(sense), 25)
+    best = counts.argmax(axis=1)
+    moves = (best != 12) & (counts[np.arange(len(sense)), best] > counts[:, 12])
+    moves &= counts[np.arange(len(sense)), best] >= 2
+    memory.frame[moves] += np.stack([best[moves] // 5 - 2, best[moves] % 5 - 2], axis=1)
 
 
 def find_the_others(
