@@ -13,7 +13,7 @@ from tests.conftest import SHAPES
 
 METRIC_KEYS = {
     "shape", "strategy", "seed", "agents", "targets", "scale", "steps", "coverage", "iou",
-    "total_distance", "overlaps", "groups",
+    "entering", "uniformity", "total_distance", "overlaps", "groups",
 }  # fmt: skip
 
 

@@ -1,9 +1,11 @@
-"""The metrics' lower bounds: exact where they say so, valid otherwise, and named."""
+"""The metrics' lower bounds: exact where they say so, valid otherwise, and named; the paper's
+rates (Sun et al. 2023) as their definitions give them."""
 
 from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from swarmshape.core import metrics
@@ -49,3 +51,31 @@ def test_without_time_for_flows_the_metrics_say_which_bound_stands_in(monkeypatc
     assert found["distance_bound_method"] == "dual" and found["distance_bound_exact"] is False
     assert found["distance_lower_bound"] <= true_distance(starts, targets)
     assert "makespan lower bound (hall bound, not proved exact)" in summary_line(found)
+
+
+def test_entering_and_uniformity_count_the_robots_on_the_shape_as_the_paper_defines_them():
+    swarm = make_swarm(SHAPE, agents=20, seed=3, strategy="optimal")
+    targets = swarm.world.targets
+    off = np.argwhere(~swarm.world.mask(targets))
+    picked = targets[::2]  # some alone, some side by side
+    far = np.linalg.norm(off - targets.mean(axis=0), axis=1).argsort()[len(picked) - 20 :]
+    cells = np.concatenate([picked, off[far]])
+    swarm.cell[:] = cells
+    swarm.offset[:] = 0.0
+    on = swarm.world.mask(targets)[cells[:, 0], cells[:, 1]]
+    gaps = np.linalg.norm(cells[:, None] - cells[None], axis=2) + np.diag(np.full(20, np.inf))
+    radius = swarm.params.senses.radius
+    nearest = np.minimum(gaps[on].min(axis=1), radius)
+    assert metrics.entering(swarm) == round(len(picked) / 20, metrics.DIGITS)
+    assert metrics.uniformity(swarm) == pytest.approx(nearest.var(), abs=1e-6)
+    assert metrics.uniformity(swarm) > 0
+
+
+def test_a_formed_shape_with_spares_has_every_target_filled_and_even_spacing():
+    swarm = make_swarm(SHAPE, agents=20, seed=3, strategy="optimal")
+    run(swarm, max_steps=20_000)
+    found = run_metrics(swarm)
+    assert found["coverage"] == 1.0
+    assert found["entering"] == round(len(swarm.world.targets) / 20, metrics.DIGITS)
+    assert found["uniformity"] == 0.0
+    assert found["groups"][0]["entering"] == found["entering"]

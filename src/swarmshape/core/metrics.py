@@ -1,7 +1,15 @@
 """How well and how fast a run formed its shape, as plain data for JSON, CSV and the HUD.
 
 - ``steps``: steps until the last target cell was filled (None if it never was).
-- ``coverage``: filled target cells / target cells, 0..1.
+- ``coverage``: filled target cells / target cells, 0..1 (Sun et al. 2023's coverage rate).
+- ``entering``: robots whose centre lies on their group's shape / robots present, 0..1 (Sun et
+  al. 2023's entering rate: below 1 for good when there are spares).
+- ``uniformity``: how unevenly the robots on the shape are spaced (Sun et al. 2023's distance
+  variance): the variance of each one's distance to its nearest neighbour, taken as the sensing
+  radius when none is within it; 0 when all are evenly spaced, as on a formed lattice shape.
+  The authors' code sums the squares over the whole swarm; the mean keeps swarms of different
+  sizes comparable, and only robots on the shape count, which is the same once all have
+  entered. None while no robot is on the shape.
 - ``iou``: intersection over union of the target cells and the cells holding the group's
   agents, counted inside the shape's bounding box; stray agents lying on the picture lower it.
 - ``total_distance``: cells travelled by all agents of the group.
@@ -56,6 +64,39 @@ def coverage(swarm: Swarm, group: int | None = None) -> float:
     return round(float(filled.mean()), DIGITS)
 
 
+def entering(swarm: Swarm, group: int | None = None) -> float:
+    """Robots on their group's shape over robots present, of one group or of all."""
+    members = _members(swarm, group)
+    return round(float(_on_shape(swarm)[members].mean()), DIGITS) if members.any() else 0.0
+
+
+def uniformity(swarm: Swarm, group: int | None = None) -> float | None:
+    """The variance of nearest-neighbour distances (at most the sensing radius) over the robots
+    on their shape, of one group or of all; None while none is on it."""
+    from scipy.spatial import cKDTree
+
+    members = _members(swarm, group)
+    inside = members & _on_shape(swarm)
+    if not inside.any():
+        return None
+    radius = swarm.params.senses.radius
+    points = swarm.positions()
+    nearest, _ = cKDTree(points[members]).query(points[inside], k=[2], distance_upper_bound=radius)
+    return round(float(np.minimum(nearest[:, 0], radius).var()), DIGITS)
+
+
+def _members(swarm: Swarm, group: int | None) -> np.ndarray:
+    present = swarm.present
+    return present if group is None else present & (swarm.group == group)
+
+
+def _on_shape(swarm: Swarm) -> np.ndarray:
+    """Whether each robot's centre lies on a target cell of its own group."""
+    cells = swarm.cells_under()
+    at = swarm.target_at[cells[:, 0], cells[:, 1]]
+    return (at >= 0) & (swarm.world.target_group[np.maximum(at, 0)] == swarm.group)
+
+
 def iou(swarm: Swarm, group: int | None = None) -> float:
     """The picture's match with the shape, of one group or averaged over all."""
     if group is None:
@@ -79,6 +120,8 @@ def group_metrics(swarm: Swarm, group: int) -> dict[str, Any]:
         "scale": round(placed.shape.scale, DIGITS),
         "steps": swarm.completed_at[group],
         "coverage": coverage(swarm, group),
+        "entering": entering(swarm, group),
+        "uniformity": uniformity(swarm, group),
         "iou": iou(swarm, group),
         "total_distance": round(float(swarm.distance[members].sum()), DIGITS),
         "overlaps": int(swarm.overlaps[group]),
@@ -148,6 +191,8 @@ def run_metrics(swarm: Swarm) -> dict[str, Any]:
         "steps": None if None in steps else max(steps),
         "steps_run": swarm.step_count,
         "coverage": coverage(swarm),
+        "entering": entering(swarm),
+        "uniformity": uniformity(swarm),
         "iou": iou(swarm),
         "total_distance": round(float(swarm.distance.sum()), DIGITS),
         "overlaps": int(swarm.overlap_total),

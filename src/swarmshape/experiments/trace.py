@@ -10,7 +10,7 @@ import csv
 from pathlib import Path
 from typing import Any
 
-from swarmshape.core.metrics import coverage, iou
+from swarmshape.core.metrics import coverage, entering, iou, uniformity
 from swarmshape.core.states import MOVING, SETTLED, STALLED, WAITING, WANDERING
 from swarmshape.core.swarm import Swarm
 from swarmshape.errors import InputError
@@ -25,6 +25,8 @@ def trace_row(swarm: Swarm) -> dict[str, Any]:
     row: dict[str, Any] = {
         "step": swarm.step_count,
         "coverage": coverage(swarm),
+        "entering": entering(swarm),
+        "uniformity": uniformity(swarm),
         "iou": iou(swarm),
         **{name: int((swarm.state == state).sum()) for name, state in COUNTS.items()},
         "messages": swarm.driver.messages_sent,
@@ -35,6 +37,8 @@ def trace_row(swarm: Swarm) -> dict[str, Any]:
     for g, placed in enumerate(swarm.world.groups):
         mine = swarm.group == g
         row[f"{placed.name}.coverage"] = coverage(swarm, g)
+        row[f"{placed.name}.entering"] = entering(swarm, g)
+        row[f"{placed.name}.uniformity"] = uniformity(swarm, g)
         row[f"{placed.name}.iou"] = iou(swarm, g)
         for name, state in COUNTS.items():
             row[f"{placed.name}.{name}"] = int((mine & (swarm.state == state)).sum())
