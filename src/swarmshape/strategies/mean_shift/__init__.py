@@ -50,8 +50,10 @@ beside it out. What differs from the continuous original, and why:
 Counts relayed hop by hop, and news a robot keeps, stop after a lap of the shape's rim at a
 robot's pace (`lap_pace`): news older than that is of a cell long filled. At twice the shape's
 cell count (no path through the swarm is longer) robots followed such news for hundreds of
-steps: the 299-robot K took 2,271 steps, and 1,178 with the lap. The kernel reaches one cell
-past the sensing radius; every other constant is the paper's or an option.
+steps: the 299-robot K took 2,271 steps, and 1,178 with the lap. Word that a news cell is
+taken travels the same way, so that news is dropped as soon as it is stale, not a lap later
+(`holes.open_news`). The kernel reaches one cell past the sensing radius; every other constant
+is the paper's or an option.
 """
 
 from __future__ import annotations
@@ -74,12 +76,13 @@ from swarmshape.strategies.skills.localise import FIXED, find_the_others, locali
 from swarmshape.strategies.skills.view import View
 
 MESSAGE = Schema(
-    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1, pull=1,
-    seen=1,
+    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1, gone_cell=2,
+    gone_age=1, pull=1, seen=1,
 )  # fmt: skip
 """What a robot broadcasts: whether it knows where it is, its frame cell, whether it stays on it
 next step, the way it is moving and how far along (see `skills.localise`); an empty rim cell it
-has news of and its hops to the robot that sees it (`holes.open_news`), and its hops to a robot
+has news of and its hops to the robot that sees it, a cell it has word is taken and how old
+that word is (`holes.open_news`); its hops to a robot
 waiting in a pocket of the shape (`holes.pulled`), and its hops to a robot that sees an
 empty cell of the shape (`MeanShift._tour`), counts said as `relay.said` puts them (0:
 none)."""
@@ -101,6 +104,8 @@ class MeanShift(Program):
         "roam": Slot(np.int64, 0),
         "news": Slot(np.int64, 0, 2),
         "news_hops": Slot(np.int64, relay.NONE),
+        "gone": Slot(np.int64, 0, 2),
+        "gone_age": Slot(np.int64, relay.NONE),
         "in_place": Slot(bool, False),
         "tour": Slot(np.int64, -1),
         "toured": Slot(np.int64, 0),
@@ -160,7 +165,7 @@ class MeanShift(Program):
         outside = localised & ~inside
         shift, free = explore.mean_shift(sense, frame, view, window, offset, outside)
         sees = free.any(axis=1)
-        memory.news_hops, memory.news = holes.open_news(
+        memory.news_hops, memory.news, memory.gone, memory.gone_age = holes.open_news(
             sense, frame, said, free, window.offsets, view, memory, cap
         )
         pull = explore.entering(sense, base, options.band)
@@ -205,6 +210,8 @@ class MeanShift(Program):
             progress=np.rint(sense.progress * FIXED),
             news=memory.news,
             news_hops=relay.said(memory.news_hops, cap),
+            gone_cell=memory.gone,
+            gone_age=relay.said(memory.gone_age, cap),
             pull=relay.said(pull, cap),
             seen=relay.said(seen, cap),
         )

@@ -29,6 +29,7 @@ back and forth.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from types import SimpleNamespace
 
 import numpy as np
@@ -114,17 +115,26 @@ def open_news(
     view: View,
     memory: Memory,
     cap: int,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Each robot's hops to a robot that sees a cell no robot will fill unless one comes for
     it, and that cell: an empty rim cell (beside the outside, `shape.depth` 1) with nobody
     outside beside it, who could step into it (no robot inside moves to a cell as shallow).
-    `free` ``(n, k)`` marks the empty shape cells each robot senses at window `offsets`. News
-    of a cell a robot sees taken is stale, and it does not pass it on. A robot keeps the news it
-    has (its `memory`), a hop older each step, until it sees the cell taken or the count runs
-    out, whatever nearer news it hears: one following news round the seeds walked out of
-    hearing of the robots that passed it on, lost it, turned back, heard it again, and so on
-    for ever; and six robots below the S, hearing of two cells by about as many hops, turned
-    from one to the other as they moved, for good (the S at 14 cells, seeds 0-11)."""
+    `free` ``(n, k)`` marks the empty shape cells each robot senses at window `offsets`. A
+    robot keeps the news it has (its `memory`), a hop older each step, until it learns the
+    cell is taken or the count runs out, whatever nearer news it hears: one following news
+    round the seeds walked out of hearing of the robots that passed it on, lost it, turned
+    back, heard it again, and so on for ever; and six robots below the S, hearing of two cells
+    by about as many hops, turned from one to the other as they moved, for good (the S at 14
+    cells, seeds 0-11).
+
+    Hops count steps since the cell was seen empty, so news is as old as its hops. A robot
+    learns that the cell of its news is taken by seeing it, or by word of it (`memory.gone`,
+    relayed a step older each step by the robots that gave up that news for it) newer than
+    the news: word older than the news is of a cell emptied again since. Kept until the count
+    ran out, news of cells long filled drew most of the 529-robot K's robots outside to its
+    seeds' corner from step 150 to 300, while the empty rim cells lay in its notches. Returns
+    the hops and news, and each robot's word: a cell said taken and how old that is (`cap`:
+    none)."""
     n, k = free.shape
     groups = np.repeat(sense.group, k)
     cells = (frame[:, None, :] + offsets[None]).reshape(-1, 2)
@@ -141,14 +151,59 @@ def open_news(
     distance = np.abs(offsets).sum(axis=1)
     nearest = np.argmin(np.where(wanted, distance[None], np.iinfo(np.int64).max), axis=1)
     found = frame + offsets[nearest]
-    source = sense.blueprint.contains(sense.group, frame) & wanted.any(axis=1)
-    stale = view.at(sense.owner, said.news - frame[sense.owner])[0]
-    fresh = sense.heard & sense.kin & ~sense.seed & (said.localised == 1) & ~stale
-    hops, news = relay.relay(
-        sense, fresh, relay.heard(said.news_hops), said.news, source, found, cap
-    )
-    older = np.minimum(memory.news_hops, cap - 1) + 1
+    localised = memory.localised
+    source = localised & sense.blueprint.contains(sense.group, frame) & wanted.any(axis=1)
+    speaks = sense.heard & sense.kin & ~sense.seed & (said.localised == 1)
     robots = np.arange(n)
-    kept = (older < cap) & ~source & ~view.at(robots, memory.news - frame)[0]
+    heard_word = np.minimum(relay.heard(said.gone_age), cap) + 1
+    own_word = np.minimum(memory.gone_age, cap) + 1
+    word = _word(
+        np.concatenate([sense.owner, robots]),
+        np.concatenate([said.gone_cell, memory.gone]),
+        np.concatenate([np.where(speaks, heard_word, cap), own_word]),
+        cap,
+    )
+    heard = relay.heard(said.news_hops)
+    stale = view.at(sense.owner, said.news - frame[sense.owner])[0]
+    stale |= word(sense.owner, said.news) <= np.minimum(heard, cap) + 1
+    hops, news = relay.relay(sense, speaks & ~stale, heard, said.news, source, found, cap)
+    held = localised & (memory.news_hops < cap)
+    older = np.minimum(memory.news_hops, cap - 1) + 1
+    seen_taken = view.at(robots, memory.news - frame)[0]
+    told = word(robots, memory.news)
+    dropped = held & (seen_taken | (told <= older))
+    kept = (older < cap) & ~source & held & ~dropped
     hops[kept], news[kept] = older[kept], memory.news[kept]
-    return hops, news
+    gone, gone_age = memory.gone.copy(), np.minimum(own_word, cap)
+    gone[dropped] = memory.news[dropped]
+    gone_age[dropped] = np.where(seen_taken, 0, told)[dropped]
+    return hops, news, gone, gone_age
+
+
+def _word(
+    owner: np.ndarray, cells: np.ndarray, ages: np.ndarray, cap: int
+) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """The newest word each robot has that a cell is taken: a lookup of robots and cells
+    ``(m,)``, ``(m, 2)`` giving its age (`cap`: none), from word of `cells` at `ages` (below
+    `cap`) that robots `owner` have."""
+    has = ages < cap
+    owner, cells, ages = owner[has], cells[has], ages[has]
+    if not len(owner):
+        return lambda robots, asked: np.full(len(robots), cap, dtype=np.int64)
+    low, high = cells.min(axis=0), cells.max(axis=0)
+    size = high - low + 1
+
+    def key(robots: np.ndarray, at: np.ndarray) -> np.ndarray:
+        return (robots * size[0] + (at[:, 0] - low[0])) * size[1] + (at[:, 1] - low[1])
+
+    order = np.lexsort((ages, key(owner, cells)))
+    keys, first = np.unique(key(owner, cells)[order], return_index=True)
+    newest = ages[order][first]
+
+    def lookup(robots: np.ndarray, asked: np.ndarray) -> np.ndarray:
+        within = ((asked >= low) & (asked <= high)).all(axis=1)
+        at = key(robots, np.clip(asked, low, high))
+        index = np.minimum(np.searchsorted(keys, at), len(keys) - 1)
+        return np.where(within & (keys[index] == at), newest[index], cap)
+
+    return lookup
