@@ -26,7 +26,7 @@ from swarmshape.env.benchmark.score import episode
 from swarmshape.env.benchmark.suite import tasks
 from swarmshape.runs import build, load_world, run, start_swarm
 from swarmshape.strategies import create
-from swarmshape.strategies.mean_shift import IN_PLACE
+from swarmshape.strategies.mean_shift import IN_PLACE, OUTSIDE
 from swarmshape.strategies.skills import shape as skills
 from tests.conftest import SHAPES, grid_from, make_swarm
 
@@ -107,6 +107,36 @@ def test_robots_outside_never_count_on_a_way_past_seeds_they_do_not_sense():
     swarm = run(swarm, max_steps=3000)
     assert swarm.complete, run_metrics(swarm)
     assert swarm.overlap_total == 0
+
+
+def test_robots_outside_keep_going_where_news_of_empty_cells_sends_them():
+    """The 299-robot K, seed 0, to step 300. Robots that had not yet worked out where they
+    were took their frame cell for (0, 0) and made news of the cells beside it, filled long
+    before (most robots outside gathered at the seeds' corner); and robots going round the
+    shape the opposite ways met head-on and waited for each other (one stood 243 steps on one
+    cell with a free cell beside it). News a robot makes names a cell of its shape not
+    filled; no robot outside stands still for long beside a free cell."""
+    swarm = build(configure(SHAPES / "letter-k.png", strategy="mean-shift", cells=24, seed=0))
+    memory, group = swarm.driver.memory, swarm.world.groups[0]
+    pairs = zip(group.frame_cells.tolist(), group.targets.tolist(), strict=True)
+    world_of = {tuple(frame): cell for frame, cell in pairs}
+    taken = np.zeros(swarm.world.size, dtype=bool)
+    still = np.zeros(len(swarm.cell), dtype=np.int64)
+    for _ in range(300):
+        filled = swarm.filled.copy()  # as robots sensed them, at the step's start
+        swarm.step()
+        for robot in np.flatnonzero(memory.news_hops == 0):
+            cell = world_of.get(tuple(memory.news[robot]))
+            assert memory.localised[robot] and cell is not None, swarm.step_count
+            assert not filled[swarm.target_at[tuple(cell)]], (swarm.step_count, robot)
+        taken[:] = False
+        taken[tuple(swarm.cell.T)] = taken[tuple(swarm.world.seeds.T)] = True
+        padded = np.pad(taken, 1, constant_values=True)
+        x, y = swarm.cell.T + 1
+        beside = ~(padded[x - 1, y] & padded[x + 1, y] & padded[x, y - 1] & padded[x, y + 1])
+        outside = (memory.state == OUTSIDE) & (swarm.ahead == 0)
+        still = np.where(outside & beside, still + 1, 0)
+        assert still.max() < 50, (swarm.step_count, np.flatnonzero(still >= 50))
 
 
 def test_word_that_a_cell_is_taken_gives_way_to_newer_news_that_it_is_empty():

@@ -18,7 +18,9 @@ Each step a robot:
    that carries a hole nearer to it (`holes.pulled`); a robot outside that can reach an empty
    shape cell it senses takes only moves that bring it nearer one (`explore.nearer`);
 5. keeps going without braking while the same move is still its choice from the cell it is
-   coming to (cruising).
+   coming to (cruising);
+6. outside, with robots in every way it wants for more than `patience` steps, steps to a free
+   cell at random (`MeanShift._moves`).
 
 A robot at rest on a shape cell counts as in place; it moves again only to carry a hole
 beside it out. What differs from the continuous original, and why:
@@ -28,7 +30,8 @@ beside it out. What differs from the continuous original, and why:
   robots: they never move and say their frame cells, and robots take theirs from them or from a
   neighbour that knows its own, so every robot holds the same frame, with no consensus error.
 - **No repulsion.** The paper keeps robots apart with a repulsive and an aligning command; on
-  the lattice two robots never share a cell and a move has no inertia. A robot is the paper's
+  the lattice two robots never share a cell and a move has no inertia, but two robots can
+  stand in each other's way for good, so a robot kept waiting steps aside. A robot is the paper's
   avoidance distance across, so an occupied cell is the paper's occupied footprint. What
   damps the paper's robots (their velocity lag, repulsion sliding them round each other)
   becomes the rule that a robot outside moves only nearer the empty cells it can reach: a
@@ -109,6 +112,7 @@ class MeanShift(Program):
         "in_place": Slot(bool, False),
         "tour": Slot(np.int64, -1),
         "toured": Slot(np.int64, 0),
+        "waited": Slot(np.int64, 0),
     }
 
     @dataclass(frozen=True)
@@ -138,6 +142,13 @@ class MeanShift(Program):
             "step): news of an empty rim cell lives, and a robot follows it, for as long as a "
             "lap of the shape's rim takes at that pace",
             at_least=0.0,
+        )
+        patience: int = option(
+            5,
+            "steps a robot outside waits with every move it wants blocked before it steps "
+            "to a free cell at random (5: the steps to cross a cell from rest at the default "
+            "limits, by when a robot in front that makes way has left it)",
+            at_least=1,
         )
         roam: int = option(
             20,
@@ -191,7 +202,9 @@ class MeanShift(Program):
         walls = explore.seeded(view.taken[rows], frame[rows])
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
         pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)
-        moves = self._moves(sense, memory, said, view, offset, inside, command, toward, pull, cap)
+        moves = self._moves(
+            sense, memory, said, view, offset, inside, command, toward, pull, cap, rng
+        )
         lost = find_the_others(sense, memory, said, view, options.roam, rng)
         moves = np.where(localised, moves, lost)
         stays = sense.ready & (moves == 0)
@@ -271,13 +284,19 @@ class MeanShift(Program):
         toward: np.ndarray,
         pull: np.ndarray,
         cap: int,
+        rng: np.random.Generator,
     ) -> np.ndarray:
         """Each robot's move: the way its command points most among the cells it may enter
         from its base (see the module's description); under way, on straight ahead or none.
         A robot outside that can reach an empty shape cell it senses moves only `toward` it
         ``(n, 4)`` (see `explore.nearer`); one inside that hears a `pull` only carries holes
         toward the pocket it comes from (`holes.pulled`): drawn back into the cell it left, it
-        would carry the hole back again."""
+        would carry the hole back again.
+
+        A robot outside at rest with robots in every way it wants for more than `patience`
+        steps on end steps to a free cell at random. Two robots going round the shape the
+        opposite ways met head-on and each waited for the other for good: on the 529-robot K
+        every robot outside stood still from step 200 to 300."""
         n = len(sense)
         ways = STEPS[1:]
         into = offset[:, None, :] + ways[None]
@@ -286,7 +305,8 @@ class MeanShift(Program):
         in_shape = sense.blueprint.contains(np.repeat(sense.group, len(ways)), cells)
         open_ = ~taken.reshape(n, -1)
         score = command @ ways.T
-        outward = open_ & np.where(toward.any(axis=1)[:, None], toward, score > 0)
+        wanted = np.where(toward.any(axis=1)[:, None], toward, score > 0)
+        outward = open_ & wanted
         groups = np.repeat(sense.group, len(ways))
         depth = shape.depth(sense.blueprint, groups, cells).reshape(n, -1)
         here = shape.depth(sense.blueprint, sense.group, memory.frame + offset)
@@ -306,6 +326,12 @@ class MeanShift(Program):
         moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)
         moves[sense.cruising & (moves != sense.heading)] = 0
         moves[~sense.ready & ~sense.cruising] = 0
+        kept_waiting = memory.localised & ~inside & sense.ready & ~sense.cruising
+        kept_waiting &= wanted.any(axis=1) & ~outward.any(axis=1)
+        memory.waited = np.where(kept_waiting, memory.waited + 1, 0)
+        rows = np.flatnonzero(memory.waited > self.options.patience)
+        aside = np.where(open_[rows], rng.random((len(rows), len(ways))), -1.0)
+        moves[rows] = np.where(aside.max(axis=1) >= 0, 1 + aside.argmax(axis=1), 0)
         return moves
 
     def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
