@@ -150,6 +150,16 @@ def test_word_that_a_cell_is_taken_gives_way_to_newer_news_that_it_is_empty():
     assert swarm.overlap_total == 0
 
 
+def test_a_robot_outside_counts_no_way_through_cells_beyond_its_senses():
+    """The 98-robot S, seed 0: the last robot outside stood above the middle bar, the last
+    hole below it. The corners of its view square lie beyond its sensing radius, and counted
+    free they made a way round the bar's end that robots in place blocked: it walked to and
+    fro toward the hole for good (99.0 % at step 6,000)."""
+    swarm = formed("letter-s.png", max_steps=1500, cells=14, seed=0)
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0
+
+
 def test_a_robot_following_news_goes_round_a_stalled_robot_in_its_way():
     """A property test's run: three robots stall at step 84, one of them on the straight way
     of a robot following news of an empty cell round the shape, which waited behind it for

@@ -75,7 +75,7 @@ def mean_shift(
     relative = offsets[None] - base[:, None, :]
     free = inside.reshape(n, -1) & ~taken & relative.any(axis=2)
     rows = np.flatnonzero(outside)
-    reach = walkable(view, rows, base[rows])
+    reach = walkable(view, rows, base[rows], offsets)
     free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
     weight = np.where(free, window.weights(relative), 0.0)
     total = weight.sum(axis=1)
@@ -85,13 +85,25 @@ def mean_shift(
     return shift, free
 
 
-def walkable(view: View, robots: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """The cells of each robot's view square it can walk to from its base through free cells,
-    four ways ``(k, side, side)``."""
+def walkable(view: View, robots: np.ndarray, base: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """The cells of each robot's view square it can walk to from its base through free cells
+    it senses (its window's `offsets`), four ways ``(k, side, side)``."""
     r = view.reach
     start = np.zeros((len(robots), *view.taken.shape[1:]), dtype=bool)
     start[np.arange(len(robots)), base[:, 0] + r, base[:, 1] + r] = True
-    return scipy.ndimage.binary_propagation(start, SIDES_IN_A_WINDOW, ~view.taken[robots])
+    free = ~view.taken[robots] & sensed(offsets, r)
+    return scipy.ndimage.binary_propagation(start, SIDES_IN_A_WINDOW, free)
+
+
+def sensed(offsets: np.ndarray, reach: int) -> np.ndarray:
+    """The window's `offsets` as a mask of a view square of half-width `reach`. The square's
+    corners lie beyond the sensing radius, where a robot sees nothing, taken or not: counted
+    free, they made ways round robots in place that were not there, and a robot above the
+    S's middle bar walked to and fro for good toward a hole below it (the S at 14 cells,
+    seed 0)."""
+    mask = np.zeros((2 * reach + 1, 2 * reach + 1), dtype=bool)
+    mask[offsets[:, 0] + reach, offsets[:, 1] + reach] = True
+    return mask
 
 
 def seeded(taken: np.ndarray, frame: np.ndarray) -> np.ndarray:
@@ -111,14 +123,15 @@ def nearer(
     taken: np.ndarray, base: np.ndarray, free: np.ndarray, offsets: np.ndarray
 ) -> np.ndarray:
     """``(n, 4)``: for each robot, the moves from its base that bring it a cell nearer, through
-    cells not `taken` (its `View` square, `seeded`: a seed beyond its senses, taken for free,
-    opened a way round the seeds that it shut again a step later, and two robots swapped
-    places for ever), to the nearest of its `free` cells ``(n, k)`` at window `offsets`
-    (none when it can reach none). A robot outside its shape takes one of these, so each of its
-    moves brings it nearer an empty cell: straight toward the mean of the cells, round a
-    robot standing still (stalled, say), it would step aside and back for ever."""
+    cells it senses (`sensed`) not `taken` (its `View` square, `seeded`: a seed beyond its
+    senses, taken for free, opened a way round the seeds that it shut again a step later, and
+    two robots swapped places for ever), to the nearest of its `free` cells ``(n, k)`` at
+    window `offsets` (none when it can reach none). A robot outside its shape takes one of
+    these, so each of its moves brings it nearer an empty cell: straight toward the mean of
+    the cells, round a robot standing still (stalled, say), it would step aside and back for
+    ever."""
     n, r = len(base), taken.shape[1] // 2
-    passable = ~taken
+    passable = ~taken & sensed(offsets, r)
     goal = np.zeros_like(passable)
     goal[:, offsets[:, 0] + r, offsets[:, 1] + r] = free
     far = np.prod(passable.shape[1:])
