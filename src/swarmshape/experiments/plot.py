@@ -250,7 +250,7 @@ def _panels(shapes: dict[str, str], title: str):
     )
     for spare in grid.flat[len(shapes) :]:
         spare.set_axis_off()
-    figure.suptitle(title)
+    figure.suptitle(title, x=0.02, ha="left")  # centred, a long title ran under the legends
     panels = dict(zip(sorted(shapes), grid.flat, strict=False))
     for shape, axes in panels.items():
         axes.set_title(_text(f"{Path(shape).name}{shapes[shape]}"), fontsize="medium")
