@@ -59,7 +59,7 @@ SPARES = 0.25
 SEED = 1
 LOCAL = ("mean-shift", "local-swap")
 """The local programs the fault figures run (`--strategies`): they form a shape in about ten
-times the steps of the central ones (12 to 23 times the makespan bound against 1.5 to 2.6)."""
+times the steps of the central ones (5 to 23 times the makespan bound against 1.5 to 2.6)."""
 LIMIT = {"optimal": 20_000, "greedy": 20_000, "random": 40_000, "paper": 400_000}
 LIMIT |= dict.fromkeys(LOCAL, 40_000)
 RATES = {"optimal": 1e-4, "greedy": 1e-4, "random": 1e-4, "paper": 1e-6}
