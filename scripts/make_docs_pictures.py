@@ -136,6 +136,7 @@ PICTURES: dict[tuple[str, ...], Callable[[Path, argparse.Namespace], None]] = {
     ("mean-shift.png",): window(
         "shapes/letter-k.png", cells=24, strategy="mean-shift", steps=150, overlays=("values",)
     ),
+    ("local-swap.png",): window("shapes/letter-k.png", cells=24, strategy="local-swap", steps=300),
     ("editor.png",): editor,
     ("star.gif",): recording,
     ("coverage.png", "steps.png"): plots,
