@@ -58,6 +58,11 @@ RUNS: dict[str, list[str]] = {
     "local-swap-noise": ["letter-k.png", "--cells", "16", "--strategy", "local-swap", *NOISE],
     "local-swap-fail": ["letter-s.png", "--cells", "20", "--strategy", "local-swap",
                         "--fail", "0.2@50"],
+    "mean-shift-letter": ["letter-s.png", "--cells", "24", "--strategy", "mean-shift"],
+    "mean-shift-noise": ["letter-k.png", "--cells", "16", "--strategy", "mean-shift", *NOISE],
+    "mean-shift-fail": ["star.png", "--cells", "24", "--strategy", "mean-shift",
+                        "--fail", "0.2@50", "--agents", "300"],
+    "mean-shift-ring": ["ring.png", "--cells", "30", "--strategy", "mean-shift"],
     "optimal-agents": ["ring.png", "--cells", "30", "--agents", "900", "--start", "packed"],
 }  # fmt: skip
 RESUMED = {
