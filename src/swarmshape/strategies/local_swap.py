@@ -18,13 +18,13 @@ from typing import ClassVar
 import numpy as np
 import scipy
 
-from swarmshape.core.compiled import njit
 from swarmshape.core.local import Memory, Program, Slot
 from swarmshape.core.motion import DIRECTION_OF, REVERSE, STEPS
 from swarmshape.core.perception import Blueprint, Boxes, Perception
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
 from swarmshape.strategies.skills.relay import best_per_robot
+from swarmshape.strategies.skills.view import paths
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
@@ -718,10 +718,9 @@ def _plan(
         (dx, dy) = STEPS[direction] + reach
         blocked[occupied[:, direction], dx, dy] = True
     blocked = blocked[rows]
-    steps = np.full(blocked.shape, -1, dtype=np.int64)
-    way = np.zeros(blocked.shape, dtype=np.int64)
-    steps[:, reach, reach] = 0
-    _spread(blocked, steps, way)
+    centre = np.zeros(blocked.shape, dtype=bool)
+    centre[:, reach, reach] = True
+    steps, way = paths(blocked, centre)
     span = np.arange(-reach, reach + 1)
     left = np.abs(delta[rows, 0, None, None] - span[None, :, None])
     left = left + np.abs(delta[rows, 1, None, None] - span[None, None, :])
@@ -733,32 +732,6 @@ def _plan(
         better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0
     )
     return chosen, np.where(going, first, 0)
-
-
-@njit
-def _spread(
-    blocked: np.ndarray, steps: np.ndarray, way: np.ndarray
-) -> None:  # pragma: no cover (compiled)
-    """Breadth-first through each robot's square from where `steps` is 0, round the `blocked`
-    cells: each cell reached gets its `steps` and the `way` of the first step to it (of equal
-    paths, the one whose first step comes first in move order)."""
-    side = blocked.shape[1]
-    for r in range(blocked.shape[0]):
-        distance, grown = 0, True
-        while grown:
-            distance, grown = distance + 1, False
-            for direction in range(1, 5):
-                dx, dy = STEPS[direction, 0], STEPS[direction, 1]
-                for x in range(max(0, -dx), min(side, side - dx)):
-                    for y in range(max(0, -dy), min(side, side - dy)):
-                        if steps[r, x, y] != distance - 1:
-                            continue
-                        tx, ty = x + dx, y + dy
-                        if blocked[r, tx, ty] or steps[r, tx, ty] >= 0:
-                            continue
-                        steps[r, tx, ty] = distance
-                        way[r, tx, ty] = direction if distance == 1 else way[r, x, y]
-                        grown = True
 
 
 def _go_round(

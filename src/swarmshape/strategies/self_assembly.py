@@ -33,14 +33,13 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
-import scipy
 
 from swarmshape.core.local import Memory, Program, Schema, Slot
 from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
-from swarmshape.strategies.skills.view import SIDES_IN_A_WINDOW
+from swarmshape.strategies.skills.view import paths
 
 START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
@@ -522,13 +521,13 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     if the robot stopped here, no robot could ever reach them (a lattice's dead ends, which
     the paper's round robots on a continuous floor do not meet)."""
     a = len(stationary)
-    if not a:  # most steps: scipy's checks alone cost more than the rest of the step's work
+    if not a:  # most steps: no robot to check
         return np.zeros(0, dtype=bool)
     free = ~stationary.reshape(a, 5, 5)
     free[:, 2, 2] = False
     start = np.zeros((a, 5, 5), dtype=bool)
     start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
-    reach = scipy.ndimage.binary_propagation(start & free, structure=SIDES_IN_A_WINDOW, mask=free)
+    reach = paths(~free, start & free)[0] >= 0
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
 

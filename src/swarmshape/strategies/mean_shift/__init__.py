@@ -170,21 +170,24 @@ class MeanShift(Program):
         view = View(sense, int(sense.radius), np.where(kin, said.heading, 0))
         offset = explore.base(sense)
         base = frame + offset
-        inside = blueprint.contains(group, base)
+        # the view's square, a cell round it for its cells' neighbours, and at least the two
+        # cells' reach of a move and the cell beside that (`_moves`)
+        around = shape.Around(blueprint, group, frame, max(int(sense.radius) + 1, 3))
+        inside = around.contains(offset)
         window = explore.Window(sense.radius)
         on_shape = localised & blueprint.contains(group, frame)
         outside = localised & ~inside
-        shift, free = explore.mean_shift(sense, frame, view, window, offset, outside)
+        shift, free = explore.mean_shift(sense, around, view, window, offset, outside)
         sees = free.any(axis=1)
         memory.news_hops, memory.news, memory.gone, memory.gone_age = holes.open_news(
-            sense, frame, said, free, window.offsets, view, memory, cap
+            sense, frame, around, said, free, window.offsets, view, memory, cap
         )
         pull = explore.entering(sense, base, options.band)
         command = options.exploring * shift + np.where(
             inside[:, None], 0.0, options.entering * pull
         )
         heard = localised & ~inside & ~sees & (memory.news_hops < cap)
-        waiting = outside & ~sees & shape.enclosed(blueprint, group, base)
+        waiting = outside & ~sees & around.enclosed(offset)
         speaks = kin & (said.localised == 1)
         seen = self._hops(sense, speaks, said.seen, localised & sees, localised, cap)
         quiet = outside & ~sees & ~waiting & ~heard & (seen >= cap)
@@ -203,7 +206,7 @@ class MeanShift(Program):
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
         pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)
         moves = self._moves(
-            sense, memory, said, view, offset, inside, command, toward, pull, cap, rng
+            sense, memory, said, view, around, offset, inside, command, toward, pull, cap, rng
         )
         lost = find_the_others(sense, memory, said, view, options.roam, rng)
         moves = np.where(localised, moves, lost)
@@ -278,6 +281,7 @@ class MeanShift(Program):
         memory: Memory,
         said: SimpleNamespace,
         view: View,
+        around: shape.Around,
         offset: np.ndarray,
         inside: np.ndarray,
         command: np.ndarray,
@@ -301,24 +305,20 @@ class MeanShift(Program):
         ways = STEPS[1:]
         into = offset[:, None, :] + ways[None]
         taken = view.at(np.repeat(np.arange(n), len(ways)), into.reshape(-1, 2))[0]
-        cells = (memory.frame[:, None, :] + into).reshape(-1, 2)
-        in_shape = sense.blueprint.contains(np.repeat(sense.group, len(ways)), cells)
+        in_shape = around.contains(into)
         open_ = ~taken.reshape(n, -1)
         score = command @ ways.T
         wanted = np.where(toward.any(axis=1)[:, None], toward, score > 0)
         outward = open_ & wanted
-        groups = np.repeat(sense.group, len(ways))
-        depth = shape.depth(sense.blueprint, groups, cells).reshape(n, -1)
-        here = shape.depth(sense.blueprint, sense.group, memory.frame + offset)
-        deeper = open_ & in_shape.reshape(n, -1) & (depth > here[:, None])
+        deeper = open_ & in_shape & (around.depth(into) > around.depth(offset)[:, None])
         # a hole robots coming in can reach is theirs; a robot on its way in takes one too
         # when the mean shift draws it there
-        met, empty = holes.open_holes(sense, memory.frame, said, view, into)
+        met, empty = holes.open_holes(sense, around, said, view, into)
         drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
         inward = deeper & (~(met | empty) | drawn)
         # a robot coming in beside a hole keeps it; one waiting in a pocket pulls the others
         pulling = inside & (pull < cap)
-        to_pocket = open_ & in_shape.reshape(n, -1) & ~met
+        to_pocket = open_ & in_shape & ~met
         to_pocket &= holes.pulled(sense, said, view, into, pull, cap)
         inward[pulling] = to_pocket[pulling]
         allowed = np.where(inside[:, None], inward, outward)

@@ -28,7 +28,8 @@ import scipy
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import SEED_CELLS
-from swarmshape.strategies.skills.view import SIDES_IN_A_WINDOW, View
+from swarmshape.strategies.skills.shape import Around
+from swarmshape.strategies.skills.view import View, paths
 
 
 def base(sense: Perception) -> np.ndarray:
@@ -56,7 +57,7 @@ class Window:
 
 def mean_shift(
     sense: Perception,
-    frame: np.ndarray,
+    around: Around,
     view: View,
     window: Window,
     base: np.ndarray,
@@ -68,12 +69,10 @@ def mean_shift(
     it can walk to through free cells it senses: it cannot pass the robots in place, and
     cells beyond them come out to it as holes (`holes`)."""
     n, offsets = len(sense), window.offsets
-    cells = (frame[:, None, :] + offsets[None]).reshape(-1, 2)
-    inside = sense.blueprint.contains(np.repeat(sense.group, len(offsets)), cells)
     r = view.reach
     taken = view.taken[:, offsets[:, 0] + r, offsets[:, 1] + r]
     relative = offsets[None] - base[:, None, :]
-    free = inside.reshape(n, -1) & ~taken & relative.any(axis=2)
+    free = around.contains(offsets[None]) & ~taken & relative.any(axis=2)
     rows = np.flatnonzero(outside)
     reach = walkable(view, rows, base[rows], offsets)
     free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
@@ -92,7 +91,7 @@ def walkable(view: View, robots: np.ndarray, base: np.ndarray, offsets: np.ndarr
     start = np.zeros((len(robots), *view.taken.shape[1:]), dtype=bool)
     start[np.arange(len(robots)), base[:, 0] + r, base[:, 1] + r] = True
     free = ~view.taken[robots] & sensed(offsets, r)
-    return scipy.ndimage.binary_propagation(start, SIDES_IN_A_WINDOW, free)
+    return paths(~free, start)[0] >= 0
 
 
 def sensed(offsets: np.ndarray, reach: int) -> np.ndarray:
@@ -135,13 +134,8 @@ def nearer(
     goal = np.zeros_like(passable)
     goal[:, offsets[:, 0] + r, offsets[:, 1] + r] = free
     far = np.prod(passable.shape[1:])
-    distance = np.where(goal, 0, far)
-    front, reached, d = goal, goal, 0
-    while front.any():
-        d += 1
-        front = scipy.ndimage.binary_dilation(front, SIDES_IN_A_WINDOW) & passable & ~reached
-        distance[front] = d
-        reached = reached | front
+    steps = paths(~passable, goal)[0]
+    distance = np.where(steps >= 0, steps, far)
     rows = np.arange(n)
     here = distance[rows, base[:, 0] + r, base[:, 1] + r]
     steps = []

@@ -28,6 +28,42 @@ def depth(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.nda
     return _depths(blueprint).at(groups, frame)
 
 
+class Around:
+    """What each robot's bitmap says of the cells round its frame cell, within `reach` cells
+    either way: whether they are in its shape, their `depth`, and so whether they are
+    `enclosed`, looked up by offsets from the frame cell ``(n, ..., 2)``. Worked out once a
+    step: a program that looks up the same cells a dozen times a step (`mean-shift`) spent a
+    sixth of its step on the lookups."""
+
+    def __init__(self, blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, reach: int):
+        self.reach = reach
+        self._inside = blueprint.number_around(groups, frame, reach) >= 0
+        self._depth = _depths(blueprint).around(groups, frame, reach)
+
+    def contains(self, offsets: np.ndarray) -> np.ndarray:
+        return self._at(self._inside, offsets)
+
+    def depth(self, offsets: np.ndarray) -> np.ndarray:
+        return self._at(self._depth, offsets)
+
+    def enclosed(self, offsets: np.ndarray) -> np.ndarray:
+        return (self.depth(offsets) > 0) & ~self.contains(offsets)
+
+    def _at(self, square: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """`square`'s values at `offsets`: per robot ``(n, ..., 2)``, or the same for every
+        robot ``(1, k, 2)``."""
+        n, side = square.shape[:2]
+        at = offsets + self.reach
+        if (at < 0).any() or (at >= side).any():
+            raise ValueError(f"an offset lies beyond the {self.reach} cells worked out")
+        index, flat = at[..., 0] * side + at[..., 1], square.reshape(n, -1)
+        if index.ndim == 1:
+            return flat[np.arange(n), index]
+        if len(index) == 1:  # one gather along each row, not three index arrays broadcast
+            return flat[:, index[0]]
+        return np.take_along_axis(flat, index.reshape(n, -1), axis=1).reshape(index.shape)
+
+
 def enclosed(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
     """Whether each frame cell lies outside its group's shape in a pocket the shape (with its
     seeds) encloses: a robot there can come in only through the pocket's own rim."""

@@ -9,13 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
-
-SIDES_IN_A_WINDOW = np.zeros((3, 3, 3), dtype=bool)
-SIDES_IN_A_WINDOW[1, 1, :] = SIDES_IN_A_WINDOW[1, :, 1] = True
-"""The structure for scipy.ndimage over a stack of robots' squares (`View.taken`): cells that
-share a side within one robot's square, never across robots."""
 
 
 class View:
@@ -56,3 +52,39 @@ class View:
         at = cells + (self.reach + 1)
         np.minimum(np.maximum(at, 0, out=at), 2 * self.reach + 2, out=at)
         return self._taken[robots, at[:, 0], at[:, 1]], self._who[robots, at[:, 0], at[:, 1]]
+
+
+def paths(blocked: np.ndarray, sources: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Breadth-first through each robot's square ``(k, side, side)`` from its `sources` cells
+    round its `blocked` ones (a source may be blocked itself): the fewest moves to each cell
+    (-1: out of reach) and the first move of a shortest way there (of equal ways, the one whose
+    first move comes first in move order; 0 at a source). Compiled: scipy's dilation, a pass
+    of the whole stack a level, cost `mean-shift` a twentieth of its step."""
+    steps = np.where(sources, 0, -1)
+    way = np.zeros(blocked.shape, dtype=np.int64)
+    _spread(np.ascontiguousarray(blocked), steps, way)
+    return steps, way
+
+
+@njit
+def _spread(
+    blocked: np.ndarray, steps: np.ndarray, way: np.ndarray
+) -> None:  # pragma: no cover (compiled)
+    """`paths`, robot by robot, a level at a time."""
+    side = blocked.shape[1]
+    for r in range(blocked.shape[0]):
+        distance, grown = 0, True
+        while grown:
+            distance, grown = distance + 1, False
+            for direction in range(1, 5):
+                dx, dy = STEPS[direction, 0], STEPS[direction, 1]
+                for x in range(max(0, -dx), min(side, side - dx)):
+                    for y in range(max(0, -dy), min(side, side - dy)):
+                        if steps[r, x, y] != distance - 1:
+                            continue
+                        tx, ty = x + dx, y + dy
+                        if blocked[r, tx, ty] or steps[r, tx, ty] >= 0:
+                            continue
+                        steps[r, tx, ty] = distance
+                        way[r, tx, ty] = direction if distance == 1 else way[r, x, y]
+                        grown = True

@@ -1,0 +1,77 @@
+"""The compiled skills that local programs share give what the plain numpy and scipy ways
+give: breadth-first paths through robots' view squares, and a shape's values round each
+robot's frame cell."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import ndimage
+
+from swarmshape.core.perception import Blueprint
+from swarmshape.strategies.skills import shape
+from swarmshape.strategies.skills.view import paths
+from tests.conftest import grid_from
+
+SIDES = ndimage.generate_binary_structure(2, 1)
+
+
+@settings(deadline=None)  # the first example compiles the kernel
+@given(st.integers(0, 2**32 - 1), st.integers(1, 9), st.floats(0.0, 0.7))
+def test_paths_count_the_moves_that_scipys_dilation_counts(seed, side, crowd):
+    rng = np.random.default_rng(seed)
+    blocked = rng.random((3, side, side)) < crowd
+    sources = rng.random((3, side, side)) < 0.1
+    steps, way = paths(blocked, sources)
+    for square in range(3):
+        expected = np.where(sources[square], 0, -1)
+        front, reached, level = sources[square], sources[square], 0
+        while front.any():
+            level += 1
+            front = ndimage.binary_dilation(front, SIDES) & ~blocked[square] & ~reached
+            expected[front] = level
+            reached = reached | front
+        assert np.array_equal(steps[square], expected)
+    first = (steps == 1).nonzero()
+    assert (way[first] > 0).all() and (way[steps == 0] == 0).all()
+
+
+def test_paths_leave_a_blocked_source_and_reach_nothing_through_walls():
+    blocked = grid_from("### #.# ###")[None]
+    sources = np.zeros_like(blocked)
+    sources[0, 0, 0] = True
+    steps, _ = paths(blocked, sources)
+    assert steps[0, 0, 0] == 0 and (steps[0][blocked[0]][1:] == -1).all()
+    assert steps[0, 1, 1] == -1, "the middle cell is walled in"
+
+
+def test_the_square_round_each_frame_cell_holds_what_a_lookup_of_each_cell_gives():
+    blueprint = Blueprint.of(
+        [np.argwhere(grid_from("##. .## ..#")), np.argwhere(grid_from("#### #..#"))]
+    )
+    rng = np.random.default_rng(3)
+    groups = rng.integers(0, 2, 40)
+    frame = rng.integers(-12, 12, (40, 2))  # well off the boxes too, where lookups clip
+    reach = 3
+    around = shape.Around(blueprint, groups, frame, reach)
+    span = np.arange(-reach, reach + 1)
+    offsets = np.stack(np.meshgrid(span, span, indexing="ij"), axis=-1).reshape(-1, 2)
+    every = np.broadcast_to(offsets, (40, len(offsets), 2))
+    cells = (frame[:, None] + offsets).reshape(-1, 2)
+    looked_up = np.repeat(groups, len(offsets))
+    depth = shape.depth(blueprint, looked_up, cells).reshape(40, -1)
+    inside = blueprint.contains(looked_up, cells).reshape(40, -1)
+    assert np.array_equal(around.depth(offsets[None]), depth)
+    assert np.array_equal(around.depth(every), depth)
+    assert np.array_equal(around.contains(every), inside)
+    assert np.array_equal(around.contains(offsets[7] + 0 * frame), inside[:, 7])
+    assert np.array_equal(around.enclosed(every), (depth > 0) & ~inside)
+
+
+def test_a_cell_beyond_the_square_worked_out_is_refused_not_wrapped_round():
+    blueprint = Blueprint.of([np.argwhere(grid_from("## ##"))])
+    around = shape.Around(blueprint, np.zeros(2, dtype=np.int64), np.zeros((2, 2), int), 2)
+    with pytest.raises(ValueError, match="beyond"):
+        around.depth(np.array([[[-3, 0]]]))
