@@ -18,6 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.local import Memory
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
@@ -41,50 +42,85 @@ def localise(sense: Perception, memory: Memory, said: SimpleNamespace) -> None:
     way tells how far: so the listener's cell is that neighbour's position less the sensed
     offset less its own progress, when that reads as a whole cell. A neighbour near a cell's
     centre that said it was under way may have just arrived or not yet set off (a move asked
-    for can fail), so it is used only when it said it stays."""
+    for can fail), so it is used only when it said it stays.
+
+    A localised robot at rest takes the cell most of its seeds and localised neighbours at
+    rest put it on, when more of them say so than say it is where it thinks. A fix from a
+    neighbour that turned as it was heard can come out a cell off, and the robots that fix
+    theirs from it inherit the error: six robots round a hole of the noisy star each held a
+    cell one off, counted the hole as filled and never carried it out. At rest with neighbours
+    at rest the reading is exact, so without noise no robot moves its cell.
+
+    Compiled (`_localise`): as a dozen numpy passes over every entry it cost `mean-shift` a
+    fifth of its step at 5,000 robots."""
     memory.frame[memory.localised] += sense.moved[memory.localised]
-    owner = sense.owner
-    kin = sense.heard & sense.kin
-    heading = STEPS[said.heading]
-    mine = sense.progress[owner, None] * STEPS[sense.heading[owner]]
-    told = said.progress / FIXED
-    along = ((sense.offset + mine) * heading).sum(axis=1)
-    gone = np.mod(along - told, 1.0)
-    s = told + gone
-    reference = np.where(sense.seed[:, None], sense.seed_frame, said.cell + s[:, None] * heading)
-    estimate = reference - sense.offset - mine
-    cells = np.rint(estimate).astype(np.int64)
-    whole = (np.abs(estimate - cells) < WHOLE).all(axis=1)
-    moving = (said.heading > 0) & (gone > WHOLE) & (gone < 1 - WHOLE)
-    robot = kin & ~sense.seed & (said.localised == 1) & ((said.stays == 1) | moving)
-    usable = whole & (robot | kin & sense.seed) & ~memory.localised[owner]
-    first = relay.best_per_robot(len(sense), owner, np.zeros(len(usable)), usable)
-    found = first >= 0
-    memory.frame[found] = cells[first[found]]
-    _recheck(sense, memory, cells, whole & (kin & sense.seed | robot & (said.stays == 1)))
+    found = _localise(
+        sense.start, sense.offset, sense.progress, sense.heading, sense.seed, sense.seed_frame,
+        sense.heard & sense.kin, said.cell, said.heading, said.progress, said.localised,
+        said.stays, memory.localised, sense.ready, memory.frame,
+    )  # fmt: skip
     memory.localised |= found
 
 
-def _recheck(sense: Perception, memory: Memory, cells: np.ndarray, still: np.ndarray) -> None:
-    """A localised robot at rest takes the cell most of its seeds and localised neighbours at
-    rest put it on (`cells`, per entry, where `still`), when more of them say so than say it is
-    where it thinks. A fix from a neighbour that turned as it was heard can come out a cell
-    off, and the robots that fix theirs from it inherit the error: six robots round a hole of
-    the noisy star each held a cell one off, counted the hole as filled and never carried it
-    out. At rest with neighbours at rest the reading is exact, so without noise no robot moves
-    its cell."""
-    owner = sense.owner
-    at_rest = memory.localised & sense.ready
-    votes = still & at_rest[owner]
-    off = cells - memory.frame[owner]
-    near = votes & (np.abs(off) <= 2).all(axis=1)
-    code = (off[:, 0] + 2) * 5 + off[:, 1] + 2
-    counts = np.bincount(owner[near] * 25 + code[near], minlength=len(sense) * 25)
-    counts = counts.reshape(len(sense), 25)
-    best = counts.argmax(axis=1)
-    moves = (best != 12) & (counts[np.arange(len(sense)), best] > counts[:, 12])
-    moves &= counts[np.arange(len(sense)), best] >= 2
-    memory.frame[moves] += np.stack([best[moves] // 5 - 2, best[moves] % 5 - 2], axis=1)
+@njit
+def _localise(
+    start: np.ndarray,
+    offset: np.ndarray,
+    progress: np.ndarray,
+    heading: np.ndarray,
+    seed: np.ndarray,
+    seed_frame: np.ndarray,
+    kin: np.ndarray,
+    cell: np.ndarray,
+    said_heading: np.ndarray,
+    said_progress: np.ndarray,
+    said_localised: np.ndarray,
+    stays: np.ndarray,
+    localised: np.ndarray,
+    ready: np.ndarray,
+    frame: np.ndarray,
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`localise` robot by robot over its entries (in reach order): a robot not yet localised
+    takes the cell its first usable entry puts it on; a localised one at rest moves its
+    `frame` to the cell most of its still entries put it on, within two cells. Returns which
+    robots found their cell."""
+    n = len(start) - 1
+    found = np.zeros(n, dtype=np.bool_)
+    votes = np.zeros(25, dtype=np.int64)
+    for r in range(n):
+        mx, my = progress[r] * STEPS[heading[r], 0], progress[r] * STEPS[heading[r], 1]
+        at_rest = localised[r] and ready[r]
+        votes[:] = 0
+        for e in range(start[r], start[r + 1]):
+            if not kin[e]:
+                continue
+            hx, hy = STEPS[said_heading[e], 0], STEPS[said_heading[e], 1]
+            told = said_progress[e] / FIXED
+            along = (offset[e, 0] + mx) * hx + (offset[e, 1] + my) * hy
+            gone = np.mod(along - told, 1.0)
+            s = told + gone
+            if seed[e]:
+                rx, ry = float(seed_frame[e, 0]), float(seed_frame[e, 1])
+            else:
+                rx, ry = cell[e, 0] + s * hx, cell[e, 1] + s * hy
+            ex, ey = rx - offset[e, 0] - mx, ry - offset[e, 1] - my
+            x, y = np.rint(ex), np.rint(ey)
+            if not (abs(ex - x) < WHOLE and abs(ey - y) < WHOLE):
+                continue
+            moving = said_heading[e] > 0 and gone > WHOLE and gone < 1 - WHOLE
+            robot = not seed[e] and said_localised[e] == 1 and (stays[e] == 1 or moving)
+            if not localised[r] and not found[r] and (robot or seed[e]):
+                frame[r, 0], frame[r, 1], found[r] = int(x), int(y), True
+            if at_rest and (seed[e] or (robot and stays[e] == 1)):
+                dx, dy = int(x) - frame[r, 0], int(y) - frame[r, 1]
+                if abs(dx) <= 2 and abs(dy) <= 2:
+                    votes[(dx + 2) * 5 + dy + 2] += 1
+        if at_rest:
+            best = np.argmax(votes)
+            if best != 12 and votes[best] > votes[12] and votes[best] >= 2:
+                frame[r, 0] += best // 5 - 2
+                frame[r, 1] += best % 5 - 2
+    return found
 
 
 def find_the_others(
