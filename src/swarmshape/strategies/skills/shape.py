@@ -51,17 +51,16 @@ class Around:
 
     def _at(self, square: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """`square`'s values at `offsets`: per robot ``(n, ..., 2)``, or the same for every
-        robot ``(1, k, 2)``."""
+        robot ``(1, k, 2)``. A program looks up two dozen sets of cells a step, so each is
+        one gather from the squares laid end to end."""
         n, side = square.shape[:2]
-        at = offsets + self.reach
-        if (at < 0).any() or (at >= side).any():
+        if np.abs(offsets).max(initial=0) > self.reach:
             raise ValueError(f"an offset lies beyond the {self.reach} cells worked out")
-        index, flat = at[..., 0] * side + at[..., 1], square.reshape(n, -1)
-        if index.ndim == 1:
-            return flat[np.arange(n), index]
-        if len(index) == 1:  # one gather along each row, not three index arrays broadcast
-            return flat[:, index[0]]
-        return np.take_along_axis(flat, index.reshape(n, -1), axis=1).reshape(index.shape)
+        index = (offsets[..., 0] + self.reach) * side + (offsets[..., 1] + self.reach)
+        if index.ndim == 2 and len(index) == 1:
+            return square.reshape(n, -1)[:, index[0]]
+        rows = np.arange(n).reshape(-1, *[1] * (index.ndim - 1)) * (side * side)
+        return square.reshape(-1)[rows + index]
 
 
 def enclosed(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
