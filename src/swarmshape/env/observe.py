@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.perception import Blueprint, Perception
 
 OWN = ("ready", "cruising", "heading", "progress", "moved_x", "moved_y", "number", "group",
@@ -87,28 +88,46 @@ def encode(sense: Perception, layout: Layout, bound: float | None = None) -> np.
     own[:, NUMBER] = sense.number
     own[:, GROUP] = sense.group
     own[:, STEP] = sense.step
-    rank = np.arange(len(sense.owner)) - sense.start[sense.owner]
-    keep = np.flatnonzero(rank < k)
-
-    def kept(values: np.ndarray) -> np.ndarray:  # np.take: far faster than values[keep]
-        return values if len(keep) == len(rank) else np.take(values, keep, axis=0)
-
-    # built field by field in contiguous rows (casting into columns is several times slower)
-    fields = np.empty((layout.slot_size, len(keep)), dtype=np.float32)
-    fields[PRESENT] = 1.0
-    fields[DX : DY + 1] = kept(sense.offset).T
-    if bound is not None:
-        np.clip(fields[DX : DY + 1], -bound, bound, out=fields[DX : DY + 1])
-    fields[SEED] = kept(sense.seed)
-    fields[KIN] = kept(sense.kin)
-    fields[HEARD] = kept(sense.heard)
-    fields[FRAME_X : FRAME_Y + 1] = kept(sense.seed_frame).T
-    fields[len(SLOT) :] = kept(sense.message).T
-    # each slot moved as one opaque item of slot_size floats: a third faster than float by float
-    whole_slot = np.dtype((np.void, fields.itemsize * layout.slot_size))
-    slots = obs[:, len(OWN) :].view(whole_slot)
-    slots[kept(sense.owner), kept(rank)] = np.ascontiguousarray(fields.T).view(whole_slot)[:, 0]
+    clip = np.inf if bound is None else bound
+    _fill_slots(
+        obs, len(OWN), layout.slot_size, k, sense.start, sense.offset, clip, sense.seed,
+        sense.kin, sense.heard, sense.seed_frame, sense.message,
+    )  # fmt: skip
     return obs
+
+
+@njit
+def _fill_slots(
+    obs: np.ndarray,
+    first: int,
+    size: int,
+    k: int,
+    start: np.ndarray,
+    offset: np.ndarray,
+    bound: float,
+    seed: np.ndarray,
+    kin: np.ndarray,
+    heard: np.ndarray,
+    seed_frame: np.ndarray,
+    message: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
+    """Each robot's first `k` entries into its slots, from column `first` on, `size` floats a
+    slot: laid out field by field, then moved slot by slot, in numpy, they cost the batched
+    environment a quarter of its step at 1,000 robots."""
+    limit = np.float32(bound)
+    for r in range(len(start) - 1):
+        for e in range(start[r], min(start[r + 1], start[r] + k)):
+            at = first + (e - start[r]) * size
+            obs[r, at + PRESENT] = 1.0
+            obs[r, at + DX] = min(max(np.float32(offset[e, 0]), -limit), limit)
+            obs[r, at + DY] = min(max(np.float32(offset[e, 1]), -limit), limit)
+            obs[r, at + SEED] = seed[e]
+            obs[r, at + KIN] = kin[e]
+            obs[r, at + HEARD] = heard[e]
+            obs[r, at + FRAME_X] = seed_frame[e, 0]
+            obs[r, at + FRAME_Y] = seed_frame[e, 1]
+            for m in range(message.shape[1]):
+                obs[r, at + len(SLOT) + m] = message[e, m]
 
 
 def perception_of(obs: np.ndarray, layout: Layout, blueprint: Blueprint) -> Perception:
