@@ -47,6 +47,8 @@ class Around:
         return self._at(self._depth, offsets)
 
     def enclosed(self, offsets: np.ndarray) -> np.ndarray:
+        """Whether each cell lies outside the shape in a pocket the shape (with its seeds)
+        encloses: a robot there can come in only through the pocket's own rim."""
         return (self.depth(offsets) > 0) & ~self.contains(offsets)
 
     def _at(self, square: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -61,12 +63,6 @@ class Around:
             return square.reshape(n, -1)[:, index[0]]
         rows = np.arange(n).reshape(-1, *[1] * (index.ndim - 1)) * (side * side)
         return square.reshape(-1)[rows + index]
-
-
-def enclosed(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.ndarray:
-    """Whether each frame cell lies outside its group's shape in a pocket the shape (with its
-    seeds) encloses: a robot there can come in only through the pocket's own rim."""
-    return (depth(blueprint, groups, frame) > 0) & ~blueprint.contains(groups, frame)
 
 
 @functools.lru_cache(maxsize=4)
