@@ -14,9 +14,10 @@ from scipy import ndimage
 
 from swarmshape.config import configure
 from swarmshape.core.faults import FaultEvent, Faults
+from swarmshape.core.local import Memory
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.motion import STEPS
-from swarmshape.core.perception import Blueprint
+from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import Shape
 from swarmshape.core.states import STALLED
 from swarmshape.core.swarm import Swarm
@@ -26,8 +27,10 @@ from swarmshape.env.benchmark.score import episode
 from swarmshape.env.benchmark.suite import tasks
 from swarmshape.runs import build, load_world, run, start_swarm
 from swarmshape.strategies import create
-from swarmshape.strategies.mean_shift import IN_PLACE, OUTSIDE
+from swarmshape.strategies.mean_shift import IN_PLACE, MESSAGE, OUTSIDE, MeanShift
+from swarmshape.strategies.skills import relay
 from swarmshape.strategies.skills import shape as skills
+from swarmshape.strategies.skills.localise import localise
 from tests.conftest import SHAPES, grid_from, make_swarm
 
 
@@ -181,6 +184,40 @@ def test_robots_a_cell_off_in_their_frame_take_the_cell_their_neighbours_give():
     task = dataclasses.replace(tasks("star-100-noisy")[0], steps=600)
     result = episode(policy("mean-shift"), task, 1)
     assert result["formed"], result
+
+
+def test_a_robot_a_cell_off_takes_its_cell_from_neighbours_nearer_the_seeds():
+    """The 1,018-robot S under noise (message loss and distance noise 0.1, seed 1) stood at
+    99.1 % for good: 196 robots held frame cells a cell off, each outvoted by its own block
+    of neighbours, and nine of them stood outside the shape believing they were on it. Here
+    robot 0 believes it is at (5, 0), a cell off; two neighbours of its block, as far from
+    the seeds as it is, agree with it, and one nearer the seeds puts it at (4, 0). It takes
+    (4, 0): only neighbours with fewer hops to the seeds (`anchor`) are asked."""
+    offsets = np.array([[0.0, 1.0], [0.0, -1.0], [-1.0, 0.0]])
+    cells = np.array([[5, 1], [5, -1], [3, 0]])  # what each neighbour says it holds
+    hops = np.array([3, 3, 2])
+    n, m = 4, len(offsets)
+    message = MESSAGE.pack(**{name: np.zeros((m, width), dtype=np.int64)
+                              for name, width in MESSAGE.widths.items()})  # fmt: skip
+    said = MESSAGE.read(message)
+    said.localised[:], said.stays[:], said.cell[:] = 1, 1, cells
+    said.anchor[:] = relay.said(hops, relay.NONE)
+    everyone = np.ones(n, dtype=bool)
+    sense = Perception(
+        number=np.arange(n), group=np.zeros(n, dtype=np.int64), ready=everyone,
+        heading=np.zeros(n, dtype=np.int64), cruising=~everyone, progress=np.zeros(n),
+        moved=np.zeros((n, 2), dtype=np.int64), start=np.array([0, m, m, m, m]),
+        owner=np.zeros(m, dtype=np.int64), offset=offsets, seed=np.zeros(m, dtype=bool),
+        kin=np.ones(m, dtype=bool), heard=np.ones(m, dtype=bool), message=message,
+        seed_frame=np.zeros((m, 2), dtype=np.int64), blueprint=Blueprint.of([cells]), step=9,
+        radius=3.0,
+    )  # fmt: skip
+    memory = Memory(MeanShift.memory, n)
+    memory.localised[:] = True
+    memory.frame[0] = (5, 0)
+    localise(sense, memory, said)
+    assert memory.frame[0].tolist() == [4, 0]
+    assert memory.anchor[0] == 3
 
 
 SLOTS = np.ones((7, 7), dtype=bool)

@@ -75,15 +75,16 @@ from swarmshape.core.perception import Perception
 from swarmshape.strategies import register, routes
 from swarmshape.strategies.mean_shift import explore, holes
 from swarmshape.strategies.skills import relay, shape
-from swarmshape.strategies.skills.localise import FIXED, find_the_others, localise
+from swarmshape.strategies.skills.localise import FIXED, anchor_said, find_the_others, localise
 from swarmshape.strategies.skills.view import View
 
 MESSAGE = Schema(
-    localised=1, cell=2, stays=1, heading=1, progress=1, news=2, news_hops=1, gone_cell=2,
-    gone_age=1, pull=1, seen=1,
+    localised=1, cell=2, stays=1, heading=1, progress=1, anchor=1, news=2, news_hops=1,
+    gone_cell=2, gone_age=1, pull=1, seen=1,
 )  # fmt: skip
 """What a robot broadcasts: whether it knows where it is, its frame cell, whether it stays on it
-next step, the way it is moving and how far along (see `skills.localise`); an empty rim cell it
+next step, the way it is moving and how far along, and its hops to the seeds through robots at
+rest (see `skills.localise`); an empty rim cell it
 has news of and its hops to the robot that sees it, a cell it has word is taken and how old
 that word is (`holes.open_news`); its hops to a robot
 waiting in a pocket of the shape (`holes.pulled`), and its hops to a robot that sees an
@@ -104,6 +105,7 @@ class MeanShift(Program):
         "state": Slot(np.int64, LOST),
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
+        "anchor": Slot(np.int64, relay.NONE),
         "roam": Slot(np.int64, 0),
         "news": Slot(np.int64, 0, 2),
         "news_hops": Slot(np.int64, relay.NONE),
@@ -224,6 +226,7 @@ class MeanShift(Program):
             stays=stays,
             heading=np.where(stays, 0, heading),
             progress=np.rint(sense.progress * FIXED),
+            anchor=anchor_said(sense, memory),
             news=memory.news,
             news_hops=relay.said(memory.news_hops, cap),
             gone_cell=memory.gone,

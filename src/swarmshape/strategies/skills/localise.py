@@ -7,9 +7,10 @@ then on keeps it by odometry. So knowledge spreads outward from the seeds a sens
 step, through robots at rest and on the move. A robot that knows nothing walks toward one that
 does, or roams straight across the arena until it sees one.
 
-A program using these keeps memory slots ``localised``, ``frame`` (2) and ``roam``, and
-broadcasts fields ``localised``, ``cell`` (2), ``heading`` (the move it is making or starting,
-0 if it stays), ``progress`` (in 1/`FIXED` cells) and ``stays``.
+A program using these keeps memory slots ``localised``, ``frame`` (2), ``anchor`` and
+``roam``, and broadcasts fields ``localised``, ``cell`` (2), ``heading`` (the move it is making
+or starting, 0 if it stays), ``progress`` (in 1/`FIXED` cells), ``stays`` and ``anchor``
+(`anchor_said`).
 """
 
 from __future__ import annotations
@@ -44,22 +45,36 @@ def localise(sense: Perception, memory: Memory, said: SimpleNamespace) -> None:
     centre that said it was under way may have just arrived or not yet set off (a move asked
     for can fail), so it is used only when it said it stays.
 
-    A localised robot at rest takes the cell most of its seeds and localised neighbours at
-    rest put it on, when more of them say so than say it is where it thinks. A fix from a
-    neighbour that turned as it was heard can come out a cell off, and the robots that fix
-    theirs from it inherit the error: six robots round a hole of the noisy star each held a
-    cell one off, counted the hole as filled and never carried it out. At rest with neighbours
+    A localised robot at rest takes the cell that most of the seeds it senses put it on, or,
+    with none in sight, most of its localised neighbours at rest *nearer the seeds*, when
+    more of them say so than say it is where it thinks. A fix from a neighbour that turned as
+    it was heard can come out a cell off, and the robots that fix theirs from it inherit the
+    error: six robots round a hole of the noisy star each held a cell one off, counted the
+    hole as filled and never carried it out. Asking every neighbour was not enough: on the
+    1,018-robot S under noise (seed 1) a block of 196 robots held frames a cell off, each
+    outvoted by its own block, and the shape stood at 99.1 % for good, nine robots outside it
+    believing they were on it. Nearness to the seeds is counted in hops through robots at
+    rest (`anchor`: 1 beside a seed, else one more than the least its neighbours at rest
+    say), which no frame error changes; asking only neighbours with fewer hops, corrections
+    spread from the seeds outward and an error cannot hold itself up. At rest with neighbours
     at rest the reading is exact, so without noise no robot moves its cell.
 
     Compiled (`_localise`): as a dozen numpy passes over every entry it cost `mean-shift` a
     fifth of its step at 5,000 robots."""
     memory.frame[memory.localised] += sense.moved[memory.localised]
-    found = _localise(
+    found, memory.anchor = _localise(
         sense.start, sense.offset, sense.progress, sense.heading, sense.seed, sense.seed_frame,
         sense.heard & sense.kin, said.cell, said.heading, said.progress, said.localised,
-        said.stays, memory.localised, sense.ready, memory.frame,
+        said.stays, relay.heard(said.anchor), memory.localised, sense.ready, memory.frame,
     )  # fmt: skip
     memory.localised |= found
+
+
+def anchor_said(sense: Perception, memory: Memory) -> np.ndarray:
+    """The ``anchor`` field a robot broadcasts: its hops to the seeds while it is localised
+    and at rest (a robot under way is no fixed point to count through), none otherwise."""
+    at_rest = memory.localised & sense.ready
+    return relay.said(np.where(at_rest, memory.anchor, relay.NONE), relay.NONE)
 
 
 @njit
@@ -76,18 +91,26 @@ def _localise(
     said_progress: np.ndarray,
     said_localised: np.ndarray,
     stays: np.ndarray,
+    anchor: np.ndarray,
     localised: np.ndarray,
     ready: np.ndarray,
     frame: np.ndarray,
-) -> np.ndarray:  # pragma: no cover (compiled)
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover (compiled)
     """`localise` robot by robot over its entries (in reach order): a robot not yet localised
     takes the cell its first usable entry puts it on; a localised one at rest moves its
-    `frame` to the cell most of its still entries put it on, within two cells. Returns which
-    robots found their cell."""
+    `frame` to the cell most of its still entries nearer the seeds put it on, within two
+    cells. Returns which robots found their cell, and every robot's hops to the seeds (from
+    the `anchor` hops its neighbours said, `relay.NONE` for none)."""
     n = len(start) - 1
     found = np.zeros(n, dtype=np.bool_)
+    hops = np.full(n, relay.NONE, dtype=np.int64)
     votes = np.zeros(25, dtype=np.int64)
     for r in range(n):
+        for e in range(start[r], start[r + 1]):
+            if kin[e] and seed[e]:
+                hops[r] = 1
+            elif kin[e] and said_localised[e] == 1 and stays[e] == 1 and anchor[e] < hops[r] - 1:
+                hops[r] = anchor[e] + 1
         mx, my = progress[r] * STEPS[heading[r], 0], progress[r] * STEPS[heading[r], 1]
         at_rest = localised[r] and ready[r]
         votes[:] = 0
@@ -111,16 +134,18 @@ def _localise(
             robot = not seed[e] and said_localised[e] == 1 and (stays[e] == 1 or moving)
             if not localised[r] and not found[r] and (robot or seed[e]):
                 frame[r, 0], frame[r, 1], found[r] = int(x), int(y), True
-            if at_rest and (seed[e] or (robot and stays[e] == 1)):
+            # beside a seed, the seeds alone; else the still robots nearer the seeds
+            nearer = seed[e] if hops[r] == 1 else robot and stays[e] == 1 and anchor[e] < hops[r]
+            if at_rest and nearer:
                 dx, dy = int(x) - frame[r, 0], int(y) - frame[r, 1]
                 if abs(dx) <= 2 and abs(dy) <= 2:
                     votes[(dx + 2) * 5 + dy + 2] += 1
         if at_rest:
             best = np.argmax(votes)
-            if best != 12 and votes[best] > votes[12] and votes[best] >= 2:
+            if best != 12 and votes[best] > votes[12]:
                 frame[r, 0] += best // 5 - 2
                 frame[r, 1] += best % 5 - 2
-    return found
+    return found, hops
 
 
 def find_the_others(
