@@ -252,7 +252,10 @@ def _neighbours(
 ) -> tuple[
     npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]
 ]:  # pragma: no cover (compiled)  # fmt: skip
-    """`neighbours` on a padded grid of who is where, counted and then filled robot by robot."""
+    """`neighbours` on a padded grid of who is where, in one pass robot by robot. Every
+    offset's occupant is written and the entry kept by adding whether it is someone: a branch
+    per offset would be mispredicted about a third of the time, which made this pass three
+    times slower in a run than the same call repeated (the predictor learns a repeated call)."""
     n = len(cell)
     r = 0
     for k in range(len(reach)):
@@ -265,19 +268,19 @@ def _neighbours(
         who[(seeds[s, 0] + r) * stride + seeds[s, 1] + r] = n + s
     shift = reach[:, 0] * stride + reach[:, 1]
     start = np.zeros(n + 1, dtype=np.int64)
+    found = np.empty(len(here) * len(shift) + 1, dtype=np.int64)
+    entry = 0
     for robot in here:
         base = (cell[robot, 0] + r) * stride + cell[robot, 1] + r
+        first = entry
         for d in shift:
-            if who[base + d] >= 0:
-                start[robot + 1] += 1
+            found[entry] = who[base + d]
+            entry += found[entry] >= 0
+        start[robot + 1] = entry - first
     for robot in range(n):
         start[robot + 1] += start[robot]
-    owner = np.empty(start[n], dtype=np.int64)
-    other = np.empty(start[n], dtype=np.int64)
+    other = found[:entry].copy()
+    owner = np.empty(entry, dtype=np.int64)
     for robot in here:
-        base, entry = (cell[robot, 0] + r) * stride + cell[robot, 1] + r, start[robot]
-        for d in shift:
-            if who[base + d] >= 0:
-                owner[entry], other[entry] = robot, who[base + d]
-                entry += 1
+        owner[start[robot] : start[robot + 1]] = robot
     return start, owner, other
