@@ -2,7 +2,7 @@
 15 weights of `swarmshape.env.benchmark.learned`, one policy shared by every robot, on 100
 robots and on shapes the benchmark never tests (horseshoe, letter K, letter S), then save them.
 
-    python examples/learn_benchmark.py --out learned.json        (about 40 minutes, 2 cores)
+    python examples/learn_benchmark.py --out learned.json        (about 8 minutes, one core)
     python examples/learn_benchmark.py --tiny                    (seconds: what the tests run)
 
 A candidate's score is the coverage averaged over every step of its episodes (a shape formed
