@@ -28,8 +28,8 @@ from swarmshape.strategies.skills.view import paths
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
-    SX, SY, SEEKER_HOPS,
-) = range(19)  # fmt: skip
+    SX, SY, SEEKER_HOPS, LEAVING,
+) = range(20)  # fmt: skip
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
 GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
@@ -37,7 +37,8 @@ robot (0 if localised), a gradient the lost ones climb down. OX, OY, OPEN_HOPS: 
 that nobody sits on or holds, and hops to the robot that sees it (see `_relay_open`). TWICE,
 TX, TY: a goal it hears held twice, by a robot at rest on it and one still on its way (see
 `_held_twice`). SX, SY, SEEKER_HOPS: a robot without a goal that calls open cells to it, and
-hops to it (see `_relay_seekers`)."""
+hops to it (see `_relay_seekers`). LEAVING: it pushes its way out of a pocket of the shape
+(see `_leaving`)."""
 
 FAR = 1000
 """HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
@@ -93,7 +94,8 @@ out, and the two did that for ever at a star's notch."""
 
 SEARCH_AFTER = 100
 """Steps a robot without a goal beside the shape, knowing of no open cell, waits for news
-before it walks to random cells of the shape to look for one (see `_search_target`). Sent at
+before it walks to random cells of the shape to look for one (see `_search_target`), or,
+walled in a pocket the shape encloses, before it pushes its way out (see `_leaving`). Sent at
 once, seekers that news would soon have reached walked away from it: the 1,018-robot S took
 29 % more steps."""
 
@@ -124,7 +126,7 @@ goal up (see `_give_up_to_the_silent`)."""
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 19
+    message_size = 20
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -154,6 +156,8 @@ class LocalSwap(Program):
         "calling": Slot(bool, False),
         "low_hops": Slot(np.int64, FAR),
         "low_age": Slot(np.int64, 0),
+        "pocketed": Slot(np.int64, 0),
+        "leaving": Slot(bool, False),
     }
 
     def act(
@@ -181,9 +185,11 @@ class LocalSwap(Program):
         target[unaware] = _search_target(
             sense, memory, unaware, searching[unaware], sense.radius, rng
         )
+        memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
+        out = _leaving(sense, memory, seeking, news, news_hops)
+        target[out] = memory.frame[out] + STEPS[_way_out(sense, memory.frame[out], out)]
         here = _same(target, memory.frame)
         resting = memory.has_goal & _same(memory.goal, memory.frame)
-        memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
         seeker, seeker_hops = _relay_seekers(sense, memory, memory.calling)
         way = _deeper(sense, memory, occupied, seeker, seeker_hops)
         deepen = memory.localised & sense.ready & (way > 0) & (resting | seeking & open_cell & here)
@@ -242,6 +248,7 @@ class LocalSwap(Program):
                 twice_cell,
                 seeker,
                 np.minimum(seeker_hops, FAR),
+                memory.leaving,
             ]
         ).astype(np.int64)
         return moves, messages
@@ -494,7 +501,9 @@ def _search_target(
     in a letter S's bay, out of sight of both arms, heard of an open cell in one arm only
     while near the other, and walked to and fro between the two for good; one beside the
     10,000-robot S, beyond the reach of any news, stood still for good while the last open
-    cell waited."""
+    cell waited. It gives up a cell it has made no headway to for `SEARCH_AFTER` steps: ten
+    robots beside a word's first two letters, cut off from the open cells of its last two,
+    all kept on to a cell inside a letter whose news had died, for good."""
     target = _nearest_cell(sense, memory, rows)
     groups = sense.group[rows]
     counts = sense.blueprint.count(groups)
@@ -505,6 +514,7 @@ def _search_target(
     aim = memory.aim[rows]
     onward = sense.blueprint.contains(groups, aim)
     onward &= np.hypot(*(aim - memory.frame[rows]).T) > radius
+    onward &= memory.stuck[rows] <= SEARCH_AFTER  # one it cannot reach it gives up
     target[onward] = aim[onward]
     return target
 
@@ -538,6 +548,64 @@ def _cut_off(
     calling = np.zeros(len(sense), dtype=bool)
     calling[rows] = np.isfinite(walked) & ((walled > 0) | (walked > ROUNDABOUT * straight))
     return calling
+
+
+def _pushed_on(memory: Memory) -> np.ndarray:
+    """Robots that traded their goal away and still stand on it: pushed out of their cell, they
+    push on at once (see `PUSH_HOPS`)."""
+    return memory.gave & (memory.since_trade < TABU) & _same(memory.given, memory.frame)
+
+
+def _leaving(
+    sense: Perception, memory: Memory, seeking: np.ndarray, news: np.ndarray, news_hops: np.ndarray
+) -> np.ndarray:
+    """Robots without a goal that push their way out of a pocket the shape encloses. One in a
+    pocket calls open cells to it (`_cut_off`), but they travel only through the shape and the
+    robots it can talk to: the last open cell may lie in another piece of the shape, and a robot
+    in the counter of a letter A or o waited for good (a word at 40 and 60 cells, 99.1 to 99.8
+    %). One that knows of an open cell in the piece round its pocket waits for it to be pulled
+    in. After `SEARCH_AFTER` steps in a pocket without a goal and without such news (steps, not
+    steps without headway: the news it heads for changes, and a robot roaming its pocket comes
+    nearer now and then), it pushes the robot in its way out (`_way_out`), and each robot pushed
+    pushes on the next (see `_trade`), until the last of the chain steps out of the shape and
+    looks for the open cell as any robot outside does. Each push moves the want of a goal one
+    cell outward and hands a cell to the robot behind, so the chain ends at the shape's rim and
+    exactly one robot leaves; robots on their goals and robots outside the shape's pockets never
+    start one."""
+    depth = _depths(sense.blueprint)[1].at(sense.group, memory.frame)
+    pocket = seeking & ~sense.blueprint.contains(sense.group, memory.frame) & (depth > 0)
+    rows = np.flatnonzero(pocket)
+    pieces, groups = _pieces(sense.blueprint), sense.group[rows]
+    first = memory.frame[rows] + STEPS[_way_out(sense, memory.frame[rows], rows)]
+    round_it = pieces.at(groups, first)  # the piece its way out goes through
+    pulled = (news_hops[rows] < FAR) & (pieces.at(groups, news[rows]) == round_it)
+    waiting = np.zeros(len(sense), dtype=bool)
+    waiting[rows[~pulled]] = True
+    memory.pocketed = np.where(waiting, memory.pocketed + 1, 0)
+    walled_in = memory.pocketed > SEARCH_AFTER
+    memory.leaving = seeking & (depth > 0) & (memory.leaving | walled_in)
+    return memory.leaving
+
+
+@functools.lru_cache(maxsize=4)
+def _pieces(blueprint: Blueprint) -> Boxes:
+    """Per group, its shape's pieces numbered from 1 (cells joined side to side, as robots
+    step and open cells travel), 0 outside, in the box of `_depths`."""
+    out = []
+    for (low, grid), shape in zip(_depth(blueprint).boxes, blueprint.cells, strict=True):
+        cells = np.zeros(grid.shape, dtype=bool)
+        cells[shape[:, 0] - low[0], shape[:, 1] - low[1]] = True
+        out.append((low, scipy.ndimage.label(cells)[0]))
+    return Boxes(out)
+
+
+def _way_out(sense: Perception, frame: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """For robots at `frame`, the way to the neighbouring cell nearest the shape's outside,
+    counting the pockets it encloses as inside (ties by direction number)."""
+    enclosed = _depths(sense.blueprint)[1]
+    groups = sense.group[rows]
+    depth = np.stack([enclosed.at(groups, frame + STEPS[d]) for d in range(1, len(STEPS))])
+    return depth.argmin(axis=0) + 1
 
 
 def _relay_seekers(
@@ -600,15 +668,21 @@ def _deeper(
     return np.where(inside, way, 0)
 
 
-@functools.lru_cache(maxsize=4)
 def _depth(blueprint: Blueprint) -> Boxes:
-    """Per group, the low corner of its shape's box (less one) and the taxicab distance of
-    each cell to the nearest cell outside the shape (0 outside), in a box padded by one. The
-    seeds count as inside: no robot comes in past them, and a cell they wall off from the
-    outside must be filled from deeper in. They sit on fixed cells of the seed frame (the
-    frame is theirs), so every robot knows them as it knows the bitmap. So do pockets of
-    outside that shape and seeds enclose (a cut corner beside the seeds)."""
-    out = []
+    """Each shape cell's steps to the nearest cell outside the shape (see `_depths`)."""
+    return _depths(blueprint)[0]
+
+
+@functools.lru_cache(maxsize=4)
+def _depths(blueprint: Blueprint) -> tuple[Boxes, Boxes]:
+    """Per group, the low corner of its shape's box (less one) and the taxicab distance of each
+    cell to the nearest cell outside the shape (0 outside), in a box padded by one; and the same
+    counting the pockets the shape encloses as inside (0 only where a robot is free to walk
+    away, see `_leaving`). The seeds count as inside: no robot comes in past them, and a cell
+    they wall off from the outside must be filled from deeper in. They sit on fixed cells of the
+    seed frame (the frame is theirs), so every robot knows them as it knows the bitmap. So do
+    pockets of outside that shape and seeds enclose (a cut corner beside the seeds)."""
+    out, enclosed = [], []
     for shape in blueprint.cells:
         cells = np.concatenate([shape, SEED_CELLS]) if len(shape) else shape
         low = cells.min(axis=0) - 1 if len(cells) else np.zeros(2, dtype=np.int64)
@@ -618,7 +692,8 @@ def _depth(blueprint: Blueprint) -> Boxes:
         inside = scipy.ndimage.binary_fill_holes(grid)
         depth = scipy.ndimage.distance_transform_cdt(inside, metric="taxicab")
         out.append((low, np.where(grid, depth, 0)))
-    return Boxes(out)
+        enclosed.append((low, depth))
+    return Boxes(out), Boxes(enclosed)
 
 
 def localise(sense: Perception, memory: Memory) -> None:
@@ -783,13 +858,14 @@ def _choose_partner(
     silent: np.ndarray,
 ) -> np.ndarray:
     """The neighbour each robot wants to trade goals with next step (its number), or -1: one
-    that shortens their summed distance, one at rest in its way (robots that each wait for
-    the next one's cell, in a ring, trade their way out of it), or (a robot without a goal,
-    see `PUSH_HOPS`) one resting in its way nearer an open cell, which gives up its cell and
-    goes on toward the open one. A trade that shortens the summed distance is agreed with a
-    neighbour on the move too (both hold still for it): two robots that met head-on in a
-    corridor each stepped aside for the other, in step, and never once both stood still to
-    trade. A robot never trades for a goal it knows a third robot rests on (see
+    that shortens their summed distance, one at rest in its way (robots that each wait for the
+    next one's cell, in a ring, trade their way out of it), or (a robot without a goal, see
+    `PUSH_HOPS`) one resting in its way nearer an open cell, which gives up its cell and goes on
+    toward the open one, or (a robot walled in a pocket, see `_leaving`) one resting in its way
+    out, which gives up its cell and goes on out. A trade that shortens the summed distance is
+    agreed with a neighbour on the move too (both hold still for it): two robots that met
+    head-on in a corridor each stepped aside for the other, in step, and never once both stood
+    still to trade. A robot never trades for a goal it knows a third robot rests on (see
     `_held_twice`), nor, resting on its own goal, for one it sees a robot on that it does not
     hear (`_silent_cells`): a robot that held a goal under a stalled robot traded it into the
     formed shape, whose robot then left its cell for it.
@@ -826,14 +902,14 @@ def _choose_partner(
     along = np.sign(theirs - mine) * np.sign(toward)
     in_the_way &= (along[:, 0] > 0) | (along[:, 1] > 0)
     their_news = msg[:, OPEN_HOPS]
-    push = in_the_way & resting_there & ~my_has & (their_news <= PUSH_HOPS)
-    pushed_on = memory.gave & (memory.since_trade < TABU) & _same(memory.given, memory.frame)
-    pushed_on = pushed_on[me]  # out of the cell it stands on: the push goes on down the chain
-    push &= (memory.stuck > STUCK)[me] | pushed_on
+    leaving = memory.leaving[me]
+    push = in_the_way & resting_there & ~my_has & ((their_news <= PUSH_HOPS) | leaving)
+    pushed_on = _pushed_on(memory)[me]  # the push goes on down the chain
+    push &= (memory.stuck > STUCK)[me] | pushed_on | leaving
     pushed = asked & my_has & ~their_has & _same(mine, my_cell)
     open_at = news[me]
     nearer = _apart(mine, open_at) < _apart(theirs, open_at)
-    pushed &= (news_hops[me] <= PUSH_HOPS) & nearer
+    pushed &= (news_hops[me] <= PUSH_HOPS) & nearer | (msg[:, LEAVING] == 1)
     fair = (gain == 0) & (asked | in_the_way)
     score = np.where(gain > 0, 2 * gain, np.where(still & (fair | push | pushed), 1, 0))
     same = (my_has == their_has) & (~my_has | _same(my_cell, their_cell))
@@ -850,7 +926,9 @@ def _choose_partner(
 
 
 def _trade(sense: Perception, memory: Memory) -> None:
-    """Robots that wanted each other last step, and hear each other now, swap goals."""
+    """Robots that wanted each other last step, and hear each other now, swap goals. One
+    that gives its goal to a robot leaving a pocket was pushed out, and leaves too (see
+    `_leaving`)."""
     me, msg = sense.owner, sense.message
     mutual = sense.heard & sense.kin & ~sense.seed & (memory.wants[me] >= 0)
     mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
@@ -862,6 +940,7 @@ def _trade(sense: Perception, memory: Memory) -> None:
     memory.came[me[mutual]] = 0  # the way back may lead to the new one
     memory.since_trade += 1
     memory.partner[me[mutual]] = msg[mutual, NUMBER]
+    memory.leaving[me[mutual]] = msg[mutual, LEAVING] == 1  # pushed out: it leaves too
     memory.since_trade[me[mutual]] = 0
 
 
