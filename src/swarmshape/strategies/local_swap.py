@@ -564,7 +564,8 @@ def _leaving(
     robots it can talk to: the last open cell may lie in another piece of the shape, and a robot
     in the counter of a letter A or o waited for good (a word at 40 and 60 cells, 99.1 to 99.8
     %). One that knows of an open cell in the piece round its pocket waits for it to be pulled
-    in. After `SEARCH_AFTER` steps in a pocket without a goal and without such news (steps, not
+    in, and so does one that knows of none in a shape of one piece, where every open cell can
+    be. After `SEARCH_AFTER` steps in a pocket without a goal and without such news (steps, not
     steps without headway: the news it heads for changes, and a robot roaming its pocket comes
     nearer now and then), it pushes the robot in its way out (`_way_out`), and each robot pushed
     pushes on the next (see `_trade`), until the last of the chain steps out of the shape and
@@ -576,9 +577,10 @@ def _leaving(
     pocket = seeking & ~sense.blueprint.contains(sense.group, memory.frame) & (depth > 0)
     rows = np.flatnonzero(pocket)
     pieces, groups = _pieces(sense.blueprint), sense.group[rows]
-    first = memory.frame[rows] + STEPS[_way_out(sense, memory.frame[rows], rows)]
-    round_it = pieces.at(groups, first)  # the piece its way out goes through
-    pulled = (news_hops[rows] < FAR) & (pieces.at(groups, news[rows]) == round_it)
+    round_it = _piece_round(sense, memory.frame[rows], rows)
+    one_piece = np.array([grid.max() for _, grid in pieces.boxes])[groups] == 1
+    told = news_hops[rows] < FAR
+    pulled = told & (pieces.at(groups, news[rows]) == round_it) | ~told & one_piece
     waiting = np.zeros(len(sense), dtype=bool)
     waiting[rows[~pulled]] = True
     memory.pocketed = np.where(waiting, memory.pocketed + 1, 0)
@@ -597,6 +599,19 @@ def _pieces(blueprint: Blueprint) -> Boxes:
         cells[shape[:, 0] - low[0], shape[:, 1] - low[1]] = True
         out.append((low, scipy.ndimage.label(cells)[0]))
     return Boxes(out)
+
+
+def _piece_round(sense: Perception, frame: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """For robots in pockets at `frame`, the piece of the shape (`_pieces`) their way out
+    (`_way_out`) first crosses: the one round the pocket, which open cells can travel in."""
+    pieces, groups = _pieces(sense.blueprint), sense.group[rows]
+    cells, piece = frame.copy(), pieces.at(groups, frame)
+    off = np.flatnonzero(piece == 0)
+    while len(off):  # each step is a cell nearer the outside, which lies past a piece
+        cells[off] += STEPS[_way_out(sense, cells[off], rows[off])]
+        piece[off] = pieces.at(groups[off], cells[off])
+        off = off[piece[off] == 0]
+    return piece
 
 
 def _way_out(sense: Perception, frame: np.ndarray, rows: np.ndarray) -> np.ndarray:
