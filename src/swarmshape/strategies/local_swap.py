@@ -563,16 +563,16 @@ def _leaving(
     pocket calls open cells to it (`_cut_off`), but they travel only through the shape and the
     robots it can talk to: the last open cell may lie in another piece of the shape, and a robot
     in the counter of a letter A or o waited for good (a word at 40 and 60 cells, 99.1 to 99.8
-    %). One that knows of an open cell in the piece round its pocket waits for it to be pulled
-    in, and so does one that knows of none in a shape of one piece, where every open cell can
-    be. After `SEARCH_AFTER` steps in a pocket without a goal and without such news (steps, not
-    steps without headway: the news it heads for changes, and a robot roaming its pocket comes
-    nearer now and then), it pushes the robot in its way out (`_way_out`), and each robot pushed
-    pushes on the next (see `_trade`), until the last of the chain steps out of the shape and
-    looks for the open cell as any robot outside does. Each push moves the want of a goal one
-    cell outward and hands a cell to the robot behind, so the chain ends at the shape's rim and
-    exactly one robot leaves; robots on their goals and robots outside the shape's pockets never
-    start one."""
+    per cent). One that knows of an open cell in the piece round its pocket waits for it to be
+    pulled in, and so does one that knows of none in a shape of one piece, where every open cell
+    can be. After `SEARCH_AFTER` steps in a pocket without a goal and without such news (steps,
+    not steps without headway: the news it heads for changes, and a robot roaming its pocket
+    comes nearer now and then), it pushes the robot in its way out (`_way_out`), and each robot
+    pushed pushes on the next (see `_trade`), until the last of the chain steps out of the shape
+    and looks for the open cell as any robot outside does. Each push moves the want of a goal
+    one cell outward and hands a cell to the robot behind, so the chain ends at the shape's rim
+    and exactly one robot leaves; robots on their goals and robots outside the shape's pockets
+    never start one."""
     depth = _depths(sense.blueprint)[1].at(sense.group, memory.frame)
     pocket = seeking & ~sense.blueprint.contains(sense.group, memory.frame) & (depth > 0)
     rows = np.flatnonzero(pocket)
