@@ -8,13 +8,15 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+from swarmshape import strategies
+from swarmshape.check import watch_run
 from swarmshape.config import configure
 from swarmshape.core.local import Memory
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.runs import build, run
 from swarmshape.strategies import local_swap
-from tests.conftest import SHAPES, grid_from, make_swarm
+from tests.conftest import SHAPES, grid_from, make_swarm, world_of
 
 
 def test_goal_less_robots_find_their_way_round_to_open_cells_with_messages_lost():
@@ -131,6 +133,28 @@ def test_robots_walled_in_a_letters_counter_push_their_way_out(seed):
     swarm = run(make_swarm(grid_from(HOPE), seed=seed, strategy="local-swap"), max_steps=3000)
     assert swarm.complete, run_metrics(swarm)
     assert swarm.overlap_total == 0
+
+
+CUT_CORNER = """
+.###
+###.
+####
+####
+.###
+"""
+"""A shape whose cut corner, top left, the seeds close off: a pocket that no piece of the
+shape walls."""
+
+
+@pytest.mark.parametrize("seed", [13, 39])
+def test_a_robot_in_a_corner_closed_off_by_the_seeds_alone_goes_on(seed):
+    """A robot without a goal in the cut corner beside the seeds is in a pocket, and it looked
+    for the piece of the shape round it along its way out; that way crosses only seeds, and the
+    search walked on past the arena for ever (a step that never ended on 5 of seeds 0 to 39,
+    the first found by ``swarmshape check``'s shapes)."""
+    world = world_of(grid_from(CUT_CORNER), 23)
+    watch = watch_run(world, strategies.get("local-swap"), seed, max_steps=3000)
+    assert watch.problems == []
 
 
 @pytest.mark.slow

@@ -603,14 +603,17 @@ def _pieces(blueprint: Blueprint) -> Boxes:
 
 def _piece_round(sense: Perception, frame: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """For robots in pockets at `frame`, the piece of the shape (`_pieces`) their way out
-    (`_way_out`) first crosses: the one round the pocket, which open cells can travel in."""
+    (`_way_out`) first crosses: the one round the pocket, which open cells can travel in; 0 for
+    a pocket walled off by the seeds alone (a cut corner beside them), whose way out crosses no
+    piece."""
     pieces, groups = _pieces(sense.blueprint), sense.group[rows]
+    enclosed = _depths(sense.blueprint)[1]
     cells, piece = frame.copy(), pieces.at(groups, frame)
     off = np.flatnonzero(piece == 0)
-    while len(off):  # each step is a cell nearer the outside, which lies past a piece
+    while len(off):  # each step is a cell nearer the outside, where the way ends
         cells[off] += STEPS[_way_out(sense, cells[off], rows[off])]
         piece[off] = pieces.at(groups[off], cells[off])
-        off = off[piece[off] == 0]
+        off = off[(piece[off] == 0) & (enclosed.at(groups[off], cells[off]) > 0)]
     return piece
 
 
