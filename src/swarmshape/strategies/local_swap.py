@@ -564,10 +564,11 @@ def _leaving(
     robots it can talk to: the last open cell may lie in another piece of the shape, and a robot
     in the counter of a letter A or o waited for good (a word at 40 and 60 cells, 99.1 to 99.8
     per cent). One that knows of an open cell in the piece round its pocket waits for it to be
-    pulled in, and so does one that knows of none in a shape of one piece, where every open cell
-    can be. After `SEARCH_AFTER` steps in a pocket without a goal and without such news (steps,
-    not steps without headway: the news it heads for changes, and a robot roaming its pocket
-    comes nearer now and then), it pushes the robot in its way out (`_way_out`), and each robot
+    pulled in, and so does one that knows of none: the shape may be formed, and a spare that
+    pushed its way out of it would open a cell of the formed shape. After `SEARCH_AFTER` steps
+    in a pocket without a goal, told only of open cells in other pieces (steps, not steps
+    without headway: the news it heads for changes, and a robot roaming its pocket comes nearer
+    now and then), it pushes the robot in its way out (`_way_out`), and each robot
     pushed pushes on the next (see `_trade`), until the last of the chain steps out of the shape
     and looks for the open cell as any robot outside does. Each push moves the want of a goal
     one cell outward and hands a cell to the robot behind, so the chain ends at the shape's rim
@@ -578,9 +579,8 @@ def _leaving(
     rows = np.flatnonzero(pocket)
     pieces, groups = _pieces(sense.blueprint), sense.group[rows]
     round_it = _piece_round(sense, memory.frame[rows], rows)
-    one_piece = np.array([grid.max() for _, grid in pieces.boxes])[groups] == 1
     told = news_hops[rows] < FAR
-    pulled = told & (pieces.at(groups, news[rows]) == round_it) | ~told & one_piece
+    pulled = ~told | (pieces.at(groups, news[rows]) == round_it)
     waiting = np.zeros(len(sense), dtype=bool)
     waiting[rows[~pulled]] = True
     memory.pocketed = np.where(waiting, memory.pocketed + 1, 0)
