@@ -12,6 +12,7 @@ from hypothesis import example, given
 from hypothesis import strategies as st
 from scipy import ndimage
 
+from swarmshape.check import watch_run
 from swarmshape.config import configure
 from swarmshape.core.faults import FaultEvent, Faults
 from swarmshape.core.local import Memory
@@ -254,3 +255,26 @@ def test_every_shape_cell_deeper_than_the_rim_has_a_shallower_one_beside_it(bits
     pieces = ndimage.label(grid)[0][cells[:, 1], cells[:, 0]]
     reaches_rim = np.isin(pieces, pieces[depth == 1])
     assert (shallower | (depth == 1) | ~reaches_rim).all()
+
+
+RIDGE = """
+...#
+#...
+.##.
+.#.#
+##..
+####
+"""
+"""A shape of single cells and short bars (`swarmshape check mean-shift --seed 100`, its second
+shape) where a robot stops right above the seeds."""
+
+
+def test_a_robot_where_the_ways_round_the_seeds_are_equally_long_takes_one():
+    """Above the seeds, going round them left or right is as short, the entering command's two
+    moves cancelled, and the robot stood there for good with the last cell open (92 % for
+    20,000 steps); it now takes the first of them."""
+    spec = GroupSpec("g", Shape(grid_from(RIDGE)), (1, 2, 3), 12)
+    auto = build_world([spec])
+    world = build_world([dataclasses.replace(spec, pose=auto.groups[0].pose)], (29, 17))
+    watch = watch_run(world, MeanShift, 3034955526, max_steps=3000)
+    assert watch.problems == []
