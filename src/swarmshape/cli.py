@@ -514,6 +514,8 @@ def describe_plugin(name: str, cls: type) -> str:
     lines = [f"{name}  ({cls.kind})  {cls.description}"]
     if cls.grows_from_seeds:
         lines.append("forms only the part of a shape that is one piece with its seeds, no holes")
+    if cls.enters_from_outside:
+        lines.append("a piece of a shape that only its pockets touch fills only from robots there")
     unread = [spec.name for spec in SETTINGS if cls.kind not in spec.readers]
     if unread:
         lines.append(f"does not read the run settings {', '.join(unread)}")

@@ -54,7 +54,8 @@ def load_world(config: RunConfig, picture: Picture | None = None) -> World:
         if len(specs) > 1:
             raise InputError("--agents applies to one shape; set agents per group in the scenario")
         specs[0] = dataclasses.replace(specs[0], agents=config.agents)
-    grows = strategies.get(config.strategy).grows_from_seeds
+    plugin = strategies.get(config.strategy)
+    grows = plugin.grows_from_seeds
     if grows:
         specs = [dataclasses.replace(spec, shape=spec.shape.seeded()) for spec in specs]
     packed = config.start == "packed"
@@ -67,6 +68,17 @@ def load_world(config: RunConfig, picture: Picture | None = None) -> World:
             ShapeWarning,
             stacklevel=2,
         )
+    if plugin.enters_from_outside:
+        for group in world.groups:
+            if sealed := group.shape.sealed_count:
+                cells = "1 cell" if sealed == 1 else f"{sealed:,} cells"
+                warnings.warn(
+                    f"shape {group.name!r} has {cells} in pieces that only pockets of the shape "
+                    f"touch: {config.strategy}'s robots never step off the shape, so those fill "
+                    "only from robots that start in the pockets",
+                    ShapeWarning,
+                    stacklevel=2,
+                )
     if not grows:
         return world
     if config.faults or config.failure_rate:

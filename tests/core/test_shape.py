@@ -111,6 +111,26 @@ def test_the_solid_part_fills_what_the_seeds_enclose_and_drops_what_they_cannot_
     assert Shape(grid_from("..# ###")).seeded().is_solid
 
 
+FUZZED_SEALED = """
+..#..#..#
+.#######.
+#.#######
+#....##..
+###.#.#.#
+##.#.####
+##.###..#
+"""
+
+
+def test_cells_of_pieces_that_only_pockets_touch_are_counted():
+    assert Shape(grid_from("##### #...# #.#.# #...# #####")).sealed_count == 1  # a ring's dot
+    assert Shape(grid_from("####### #.....# #.###.# #.....# #######")).sealed_count == 3
+    assert Shape(grid_from("##.## ##.##")).sealed_count == 0  # apart, both on the outside
+    assert Shape(grid_from("### #.# ###")).sealed_count == 0  # a pocket, but nothing in it
+    # drawn at random (a fuzz): a one-cell piece in a pocket that two other pieces wall in
+    assert Shape(grid_from(FUZZED_SEALED)).sealed_count == 1
+
+
 def test_a_solid_shape_stays_solid_when_fitted_to_fewer_robots():
     shape = Shape(grid_from("..#... .#..#. .#..#. ###### ###...")).seeded()
     assert shape.is_solid  # its two tips touch the seeds

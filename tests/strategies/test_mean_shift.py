@@ -5,11 +5,14 @@ options."""
 from __future__ import annotations
 
 import dataclasses
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
+from PIL import Image
 from scipy import ndimage
 
 from swarmshape.check import watch_run
@@ -26,6 +29,7 @@ from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.env.benchmark.baselines import policy
 from swarmshape.env.benchmark.score import episode
 from swarmshape.env.benchmark.suite import tasks
+from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import build, load_world, run, start_swarm
 from swarmshape.strategies import create
 from swarmshape.strategies.mean_shift import IN_PLACE, MESSAGE, OUTSIDE, MeanShift
@@ -278,3 +282,27 @@ def test_a_robot_where_the_ways_round_the_seeds_are_equally_long_takes_one():
     world = build_world([dataclasses.replace(spec, pose=auto.groups[0].pose)], (29, 17))
     watch = watch_run(world, MeanShift, 3034955526, max_steps=3000)
     assert watch.problems == []
+
+
+def pocket_warnings(image: Path, strategy: str) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        load_world(configure(image, strategy=strategy, cells=5, seed=1))
+    return [str(w.message) for w in caught if issubclass(w.category, ShapeWarning)]
+
+
+def test_a_piece_of_the_shape_that_only_its_pockets_touch_is_warned_about(tmp_path):
+    """A one-cell piece inside a pocket that the rest of the shape walls in (a fuzz's shape
+    stood at 97.5 % for 15,000 steps): mean-shift's robots never step off the shape, so only a
+    robot that starts in the pocket can fill it, and the run says so in one line. local-swap's
+    robots trade and push their way across the shape, and get no such warning."""
+    image = tmp_path / "dot-in-a-ring.png"
+    ink = np.zeros((9, 9), dtype=bool)  # a white page, so that the black is the ink
+    ink[2:7, 2:7] = True
+    ink[3:6, 3:6] = False
+    ink[4, 4] = True
+    Image.fromarray(np.where(ink, 0, 255).astype(np.uint8)).save(image)
+    (said,) = pocket_warnings(image, "mean-shift")
+    assert "has 1 cell in pieces that only pockets of the shape touch" in said
+    assert "\n" not in said
+    assert pocket_warnings(image, "local-swap") == []

@@ -39,6 +39,10 @@ class Plugin:
     """True if the plug-in builds outward from the seeds, so it can form only a shape's
     `Shape.solid` part (one piece with its seeds, no holes): checks and tests then give it
     solid shapes, and a run warns about any other."""
+    enters_from_outside: ClassVar[bool] = False
+    """True if its robots, once on the shape, never step off it: a piece of the shape that
+    touches only pockets of other pieces (`Shape.sealed_count`) then fills only from robots
+    that start in those pockets, and a run warns about such a shape."""
     Options: ClassVar[type[Any]] = NoOptions
     """Its own settings (see the module's docstring)."""
 

@@ -140,6 +140,26 @@ class Shape:
         solid = Shape.from_cells(np.column_stack([cols, rows]) + low)
         return Shape(solid.grid, self.scale, solid.origin)
 
+    @property
+    def sealed_count(self) -> int:
+        """How many cells lie in pieces of the shape (cells joined by sides) that touch no cell
+        of the outside: only pockets that other pieces and the seeds enclose. A robot comes
+        into such a piece only across another piece, or from a pocket it started in."""
+        from scipy import ndimage
+
+        cells = np.concatenate([SEED_CELLS, self.cells])
+        low = cells.min(axis=0) - 1
+        size = cells.max(axis=0) - low + 2
+        shape = np.zeros((size[1], size[0]), dtype=bool)
+        shape[self.cells[:, 1] - low[1], self.cells[:, 0] - low[0]] = True
+        walls = shape.copy()
+        walls[SEED_CELLS[:, 1] - low[1], SEED_CELLS[:, 0] - low[0]] = True
+        free, _ = ndimage.label(~walls)
+        outside = free == free[0, 0]  # the padded box's corner lies outside everything
+        reached = ndimage.binary_dilation(outside) & shape
+        pieces, _ = ndimage.label(shape)
+        return int(np.isin(pieces, pieces[reached], invert=True)[shape].sum())
+
     def _touches_seeds(self) -> bool:
         beside = SEED_SIDES - np.array(self.origin)
         height, width = self.grid.shape

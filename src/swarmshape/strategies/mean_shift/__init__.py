@@ -98,6 +98,7 @@ LOST, OUTSIDE, INSIDE, IN_PLACE = range(4)
 class MeanShift(Program):
     name = "mean-shift"
     description = "entering and mean shift toward unoccupied cells sensed (Sun et al. 2023)"
+    enters_from_outside = True
     message_size = len(MESSAGE)
     states = ("lost", "outside the shape", "inside, moving", "in place")
     shown = "news_hops"
