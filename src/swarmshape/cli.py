@@ -515,7 +515,10 @@ def describe_plugin(name: str, cls: type) -> str:
     if cls.grows_from_seeds:
         lines.append("forms only the part of a shape that is one piece with its seeds, no holes")
     if cls.enters_from_outside:
-        lines.append("a piece of a shape that only its pockets touch fills only from robots there")
+        lines.append(
+            "a piece of a shape that only its pockets touch, beyond the sensing radius of the "
+            "rest, fills only from robots there"
+        )
     unread = [spec.name for spec in SETTINGS if cls.kind not in spec.readers]
     if unread:
         lines.append(f"does not read the run settings {', '.join(unread)}")

@@ -70,12 +70,13 @@ def load_world(config: RunConfig, picture: Picture | None = None) -> World:
         )
     if plugin.enters_from_outside:
         for group in world.groups:
-            if sealed := group.shape.sealed_count:
+            if sealed := len(group.shape.sealed(config.sense_radius)):
                 cells = "1 cell" if sealed == 1 else f"{sealed:,} cells"
                 warnings.warn(
                     f"shape {group.name!r} has {cells} in pieces that only pockets of the shape "
-                    f"touch: {config.strategy}'s robots never step off the shape, so those fill "
-                    "only from robots that start in the pockets",
+                    f"touch, beyond the sensing radius ({config.sense_radius:g}) of the rest: "
+                    f"{config.strategy}'s robots step off the shape only toward an empty cell "
+                    "they sense, so those fill only from robots that start in the pockets",
                     ShapeWarning,
                     stacklevel=2,
                 )

@@ -122,13 +122,30 @@ FUZZED_SEALED = """
 """
 
 
-def test_cells_of_pieces_that_only_pockets_touch_are_counted():
-    assert Shape(grid_from("##### #...# #.#.# #...# #####")).sealed_count == 1  # a ring's dot
-    assert Shape(grid_from("####### #.....# #.###.# #.....# #######")).sealed_count == 3
-    assert Shape(grid_from("##.## ##.##")).sealed_count == 0  # apart, both on the outside
-    assert Shape(grid_from("### #.# ###")).sealed_count == 0  # a pocket, but nothing in it
+def test_cells_of_pieces_that_only_pockets_touch_are_found():
+    ring_with_a_dot = Shape(grid_from("##### #...# #.#.# #...# #####"))
+    assert ring_with_a_dot.sealed().tolist() == [[2, 2]]
+    assert len(Shape(grid_from("####### #.....# #.###.# #.....# #######")).sealed()) == 3
+    assert len(Shape(grid_from("##.## ##.##")).sealed()) == 0  # apart, both on the outside
+    assert len(Shape(grid_from("### #.# ###")).sealed()) == 0  # a pocket, but nothing in it
     # drawn at random (a fuzz): a one-cell piece in a pocket that two other pieces wall in
-    assert Shape(grid_from(FUZZED_SEALED)).sealed_count == 1
+    assert len(Shape(grid_from(FUZZED_SEALED)).sealed()) == 1
+
+
+def test_a_sealed_piece_within_the_radius_of_a_piece_reached_is_reached():
+    """Two cells from the ring, the dot is in reach of a robot on the ring that senses two
+    cells; a dot in a ring's middle three cells from it is not, until the radius reaches it,
+    and a piece within reach of a piece so reached is reached too."""
+    ring_with_a_dot = Shape(grid_from("##### #...# #.#.# #...# #####"))
+    assert len(ring_with_a_dot.sealed(1.9)) == 1 and len(ring_with_a_dot.sealed(2.0)) == 0
+    wide = Shape(grid_from("####### #.....# #.....# #..#..# #.....# #.....# #######"))
+    assert len(wide.sealed(2.0)) == 1 and len(wide.sealed(3.0)) == 0
+    nested = Shape(
+        grid_from("######### #.......# #.#####.# #.#...#.# #.#.#.#.# #.#...#.# #.#####.# "
+                  "#.......# #########")
+    )  # fmt: skip
+    assert len(nested.sealed()) == 17
+    assert len(nested.sealed(1.9)) == 17 and len(nested.sealed(2.0)) == 0
 
 
 def test_a_solid_shape_stays_solid_when_fitted_to_fewer_robots():

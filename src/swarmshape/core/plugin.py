@@ -40,9 +40,10 @@ class Plugin:
     `Shape.solid` part (one piece with its seeds, no holes): checks and tests then give it
     solid shapes, and a run warns about any other."""
     enters_from_outside: ClassVar[bool] = False
-    """True if its robots, once on the shape, never step off it: a piece of the shape that
-    touches only pockets of other pieces (`Shape.sealed_count`) then fills only from robots
-    that start in those pockets, and a run warns about such a shape."""
+    """True if its robots, once on the shape, step off it only toward an empty cell they
+    sense: a piece of the shape that touches only pockets of other pieces, beyond the sensing
+    radius of them (`Shape.sealed`), then fills only from robots that start in those pockets,
+    and a run warns about such a shape."""
     Options: ClassVar[type[Any]] = NoOptions
     """Its own settings (see the module's docstring)."""
 

@@ -140,11 +140,13 @@ class Shape:
         solid = Shape.from_cells(np.column_stack([cols, rows]) + low)
         return Shape(solid.grid, self.scale, solid.origin)
 
-    @property
-    def sealed_count(self) -> int:
-        """How many cells lie in pieces of the shape (cells joined by sides) that touch no cell
-        of the outside: only pockets that other pieces and the seeds enclose. A robot comes
-        into such a piece only across another piece, or from a pocket it started in."""
+    def sealed(self, radius: float = 0.0) -> np.ndarray:
+        """The frame cells ``(k, 2)`` of pieces of the shape (cells joined by sides) that touch
+        no cell of the outside, only pockets that other pieces and the seeds enclose, and lie
+        farther than `radius` (cell to cell) from every piece a robot can reach: one beside the
+        outside, or within `radius` of one reached. A robot comes into such a piece only
+        across another piece, from a pocket it started in, or toward an empty cell of it that
+        it senses (within `radius`) from a piece it stands on."""
         from scipy import ndimage
 
         cells = np.concatenate([SEED_CELLS, self.cells])
@@ -156,9 +158,17 @@ class Shape:
         walls[SEED_CELLS[:, 1] - low[1], SEED_CELLS[:, 0] - low[0]] = True
         free, _ = ndimage.label(~walls)
         outside = free == free[0, 0]  # the padded box's corner lies outside everything
-        reached = ndimage.binary_dilation(outside) & shape
         pieces, _ = ndimage.label(shape)
-        return int(np.isin(pieces, pieces[reached], invert=True)[shape].sum())
+        reached = np.isin(pieces, pieces[ndimage.binary_dilation(outside) & shape]) & shape
+        while radius > 0 and (shape & ~reached).any():
+            # the cells within `radius` of a reached cell, and the pieces they lie in
+            near = ndimage.distance_transform_edt(~reached) <= radius
+            grown = np.isin(pieces, pieces[near & shape & ~reached]) & shape | reached
+            if (grown == reached).all():
+                break
+            reached = grown
+        rows, cols = np.nonzero(shape & ~reached)
+        return np.column_stack([cols, rows]).astype(np.int64) + low
 
     def _touches_seeds(self) -> bool:
         beside = SEED_SIDES - np.array(self.origin)

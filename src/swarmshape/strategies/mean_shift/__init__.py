@@ -16,7 +16,9 @@ Each step a robot:
    empty cell it leaves lies nearer the robots outside, and one in place enters only a cell
    they cannot reach (`holes`), or, when a robot waits in a pocket the shape encloses, one
    that carries a hole nearer to it (`holes.pulled`); a robot outside that can reach an empty
-   shape cell it senses takes only moves that bring it nearer one (`explore.nearer`);
+   shape cell it senses takes only moves that bring it nearer one (`explore.nearer`); toward
+   an empty cell of a piece that only pockets touch, a robot steps across the pocket
+   (`holes.across_pockets`);
 5. keeps going without braking while the same move is still its choice from the cell it is
    coming to (cruising);
 6. outside, with robots in every way it wants for more than `patience` steps, steps to a free
@@ -208,9 +210,17 @@ class MeanShift(Program):
         walls = explore.seeded(view.taken[rows], frame[rows])
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
         pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)
+        across = np.zeros_like(toward)
+        if around.any_sealed:
+            in_pocket = outside & around.enclosed(offset)
+            rows = np.flatnonzero(localised & (memory.in_place | in_pocket))
+            across[rows] = holes.across_pockets(
+                sense, said, view, around, frame, offset, free, window.offsets, rows
+            )
         moves = self._moves(
-            sense, memory, said, view, around, offset, inside, command, toward, pull, cap, rng
-        )
+            sense, memory, said, view, around, offset, inside, command, toward, across, pull,
+            cap, rng,
+        )  # fmt: skip
         lost = find_the_others(sense, memory, said, view, options.roam, rng)
         moves = np.where(localised, moves, lost)
         stays = sense.ready & (moves == 0)
@@ -290,6 +300,7 @@ class MeanShift(Program):
         inside: np.ndarray,
         command: np.ndarray,
         toward: np.ndarray,
+        across: np.ndarray,
         pull: np.ndarray,
         cap: int,
         rng: np.random.Generator,
@@ -299,7 +310,8 @@ class MeanShift(Program):
         A robot outside that can reach an empty shape cell it senses moves only `toward` it
         ``(n, 4)`` (see `explore.nearer`); one inside that hears a `pull` only carries holes
         toward the pocket it comes from (`holes.pulled`): drawn back into the cell it left, it
-        would carry the hole back again.
+        would carry the hole back again. A robot with a way `across` pockets to an empty cell
+        of a piece that only pockets touch takes it (`holes.across_pockets`), in place or not.
 
         A robot outside at rest with robots in every way it wants for more than `patience`
         steps on end steps to a free cell at random. Two robots going round the shape the
@@ -312,6 +324,7 @@ class MeanShift(Program):
         in_shape = around.contains(into)
         open_ = ~taken.reshape(n, -1)
         score = command @ ways.T
+        toward = np.where((~inside & across.any(axis=1))[:, None], across, toward)
         wanted = np.where(toward.any(axis=1)[:, None], toward, score > 0)
         outward = open_ & wanted
         deeper = open_ & in_shape & (around.depth(into) > around.depth(offset)[:, None])
@@ -325,6 +338,9 @@ class MeanShift(Program):
         to_pocket = open_ & in_shape & ~met
         to_pocket &= holes.pulled(sense, said, view, into, pull, cap)
         inward[pulling] = to_pocket[pulling]
+        off_shape = open_ & ~in_shape & across
+        crossing = off_shape.any(axis=1)
+        inward[crossing] = off_shape[crossing]
         allowed = np.where(inside[:, None], inward, outward)
         best = 1 + np.argmax(np.where(allowed, score, -np.inf), axis=1)
         moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)

@@ -11,7 +11,7 @@ import numpy as np
 import scipy
 
 from swarmshape.core.perception import Blueprint, Boxes
-from swarmshape.core.shape import SEED_CELLS
+from swarmshape.core.shape import SEED_CELLS, Shape
 
 MARGIN = 2
 """Cells round the shape's box: a robot farther out is looked up on the box's edge."""
@@ -31,20 +31,34 @@ def depth(blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray) -> np.nda
 class Around:
     """What each robot's bitmap says of the cells round its frame cell, within `reach` cells
     either way: whether they are in its shape, their `depth`, and so whether they are
-    `enclosed`, looked up by offsets from the frame cell ``(n, ..., 2)``. Worked out once a
-    step: a program that looks up the same cells a dozen times a step (`mean-shift`) spent a
-    sixth of its step on the lookups."""
+    `enclosed`, and whether they lie in a `sealed` piece, looked up by offsets from the frame
+    cell ``(n, ..., 2)``. Worked out once a step: a program that looks up the same cells a
+    dozen times a step (`mean-shift`) spent a sixth of its step on the lookups."""
 
     def __init__(self, blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, reach: int):
         self.reach = reach
         self._inside = blueprint.number_around(groups, frame, reach) >= 0
         self._depth = _depths(blueprint).around(groups, frame, reach)
+        sealed = _sealed(blueprint)
+        self._sealed = None if sealed is None else sealed.around(groups, frame, reach)
 
     def contains(self, offsets: np.ndarray) -> np.ndarray:
         return self._at(self._inside, offsets)
 
     def depth(self, offsets: np.ndarray) -> np.ndarray:
         return self._at(self._depth, offsets)
+
+    def sealed(self, offsets: np.ndarray) -> np.ndarray:
+        """Whether each cell lies in a piece of the shape that touches no cell of the outside,
+        only pockets that other pieces enclose (`Shape.sealed`)."""
+        if self._sealed is None:  # no group's shape has such a piece
+            return np.zeros_like(self._at(self._inside, offsets))
+        return self._at(self._sealed, offsets)
+
+    @property
+    def any_sealed(self) -> bool:
+        """Whether some group's shape has a piece that only its pockets touch."""
+        return self._sealed is not None
 
     def enclosed(self, offsets: np.ndarray) -> np.ndarray:
         """Whether each cell lies outside the shape in a pocket the shape (with its seeds)
@@ -80,6 +94,21 @@ def _depths(blueprint: Blueprint) -> Boxes:
         grid[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
         depths.append((low, _through(body, scipy.ndimage.binary_fill_holes(grid))))
     return Boxes(depths)
+
+
+@functools.lru_cache(maxsize=4)
+def _sealed(blueprint: Blueprint) -> Boxes | None:
+    """Per group, which cells of a box round its shape lie in a piece that only its pockets
+    touch (`Shape.sealed`); None when no group's shape has one."""
+    boxes = []
+    for shape in blueprint.cells:
+        low = shape.min(axis=0) - 1 if len(shape) else np.zeros(2, dtype=np.int64)
+        grid = np.zeros(shape.max(axis=0) + 2 - low if len(shape) else (1, 1), dtype=bool)
+        if len(shape):
+            sealed = Shape.from_cells(shape).sealed()
+            grid[sealed[:, 0] - low[0], sealed[:, 1] - low[1]] = True
+        boxes.append((low, grid))
+    return Boxes(boxes) if any(grid.any() for _, grid in boxes) else None
 
 
 def _through(shape: np.ndarray, inside: np.ndarray) -> np.ndarray:
