@@ -28,10 +28,11 @@ back and forth.
 
 A piece of the shape that only pockets touch (a ring's dot, an eye in a face: `Shape.sealed`)
 fills from no robot outside, and from no hole carried to it. A robot in place that senses an
-empty cell of such a piece steps off the shape into the pocket toward it, and a robot in a
-pocket that can reach one goes to it before any other empty cell (`across_pockets`); the hole it
-left travels out as any other. A fuzz's shape stood at 98.2 % for 15,000 steps, its one-cell
-piece walled in by pockets, before robots stepped across them.
+empty cell of such a piece, deeper than its own, steps off the shape into the pocket toward
+it, and a robot in a pocket that can reach one goes to it before any other empty cell
+(`across_pockets`); the hole it leaves lies shallower and travels out as any other. A fuzz's
+shape stood at 98.2 % for 15,000 steps, its one-cell piece walled in by pockets, before robots
+stepped across them.
 """
 
 from __future__ import annotations
@@ -94,24 +95,33 @@ def across_pockets(
     window `offsets`), through free cells of pockets only: none when it can reach none. A way
     through shape cells would lead a robot in a pocket back out of it, round the shape, and
     move a robot in place along its own piece, shifting a hole about instead of filling it.
+    A robot in place goes only to a cell deeper than its own (`shape.depth`), as one inside
+    does, so the hole it leaves lies shallower and travels out: two robots on a face's mouth,
+    two pieces that touch at a corner, stepped off each to fill the other's empty cell, for
+    good.
 
-    Of the robots in place beside a pocket, only the one nearest the empty cell steps in
-    (`_first_beside`): when every robot round the inner ring of two nested rings stepped in
-    toward the dot at once, those left over stood in the pocket for good, the cells they left
-    filled from the outer ring, and the outer ring stayed two cells short."""
+    Of the robots in place beside a pocket that could go, only the one nearest the empty
+    cell steps in (`_first_beside`): two robots round the inner ring of two nested rings
+    stepped toward the dot at once, and the one left over stood in the pocket for good, the
+    cell it left filled from the outer ring, which stayed a cell short."""
     # the view's square and a cell round it, for the cells beside those of robots in it
     reach = view.reach + 1
     span = np.arange(-reach, reach + 1)
     square = np.stack(np.meshgrid(span, span, indexing="ij"), axis=-1).reshape(1, -1, 2)
     inside = around.contains(square)[robots].reshape(-1, 2 * reach + 1, 2 * reach + 1)
     pockets = around.enclosed(square)[robots].reshape(inside.shape)
+    depth = np.where(inside, around.depth(square)[robots].reshape(inside.shape), 0)
     walls = explore.seeded(view.taken[robots], frame[robots]) | ~pockets[:, 1:-1, 1:-1]
+    rows = np.arange(len(robots))
+    at = base[robots] + reach
+    on_shape, own = inside[rows, at[:, 0], at[:, 1]], depth[rows, at[:, 0], at[:, 1]]
     goals = free[robots] & around.sealed(offsets[None])[robots]
+    goals &= depth[:, offsets[:, 0] + reach, offsets[:, 1] + reach] > own[:, None]
     moves = explore.nearer(walls, base[robots], goals, offsets)
     away = ((offsets[None] - base[robots, None]) ** 2).sum(axis=2)
     goal = offsets[np.argmin(np.where(goals, away, np.iinfo(np.int64).max), axis=1)]
-    first = _first_beside(sense, said, view, inside, pockets, goal, robots)
-    moves[around.contains(base)[robots] & ~first] = False
+    first = _first_beside(sense, said, view, inside, pockets, depth, goal, robots)
+    moves[on_shape & ~first] = False
     return moves
 
 
@@ -121,14 +131,16 @@ def _first_beside(
     view: View,
     inside: np.ndarray,
     pockets: np.ndarray,
+    depth: np.ndarray,
     goal: np.ndarray,
     robots: np.ndarray,
 ) -> np.ndarray:
-    """Per robot of `robots`, whether no robot in place that it hears, with a free pocket cell
-    beside it, lies nearer its `goal` cell ``(k, 2)`` (relative to its own), or as near and
-    first by its cell (lower x, then y), so that of the robots beside a pocket that see one
-    empty cell, one steps in. `inside` and `pockets` are the robots' squares of shape and
-    pocket cells, a cell wider than their view each side."""
+    """Per robot of `robots`, whether no robot in place that it hears, shallower than its
+    `goal` cell ``(k, 2)`` (relative to its own) and with a free pocket cell beside it, lies
+    nearer that cell, or as near and first by its cell (lower x, then y), so that of the
+    robots beside a pocket that could go to one empty cell, one steps in. `inside`,
+    `pockets` and `depth` are the robots' squares of shape cells, pocket cells and depths, a
+    cell wider than their view each side."""
     reach = inside.shape[1] // 2
     index = np.full(len(sense), -1, dtype=np.int64)
     index[robots] = np.arange(len(robots))
@@ -136,7 +148,10 @@ def _first_beside(
     entries = entries[(np.abs(view.cells[entries]) < reach).all(axis=1)]
     mine, cell = index[sense.owner[entries]], view.cells[entries]
     rival = sense.heard[entries] & sense.kin[entries] & ~sense.seed[entries]
-    rival &= (said.stays[entries] == 1) & inside[mine, cell[:, 0] + reach, cell[:, 1] + reach]
+    x, y = (cell + reach).T
+    rival &= (said.stays[entries] == 1) & inside[mine, x, y]
+    gx, gy = (goal[mine] + reach).T
+    rival &= depth[mine, x, y] < depth[mine, gx, gy]
     beside = np.zeros(len(entries), dtype=bool)
     for step in STEPS[1:]:
         x, y = (cell + step).T
