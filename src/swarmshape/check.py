@@ -30,12 +30,13 @@ import numpy as np
 
 from swarmshape import strategies
 from swarmshape.core.audit import overlapping_pairs
+from swarmshape.core.faults import Faults
 from swarmshape.core.guard import PluginCode
 from swarmshape.core.shape import Shape
 from swarmshape.core.snapshot import Snapshot, SnapshotError, prefixed
 from swarmshape.core.states import SETTLED
 from swarmshape.core.steering import Strategy
-from swarmshape.core.swarm import Swarm
+from swarmshape.core.swarm import Params, Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import PluginError, Stopped
 from swarmshape.io.checkpoint import load_state, save_state
@@ -203,17 +204,20 @@ def watch_run(
     max_steps: int,
     step_seconds: float = STEP_SECONDS,
     resume_at: int | None = None,
+    params: Params | None = None,
+    faults: Faults | None = None,
 ) -> InvariantWatch:
     """Run one strategy on `world` to the end under an `InvariantWatch`, each step (and the
     making of the swarm) within `step_seconds`, saved to a file and resumed after step
-    `resume_at` if given."""
+    `resume_at` if given; with the run's `params` (its senses' noise, say) and `faults` if
+    given."""
     watch = InvariantWatch()
     runner: Runner | None = None
     try:
         with _time_limit(step_seconds) as limited:
             with PluginCode.of(cls).running(" as it was made"):
                 plugin = strategies.create(cls)
-            swarm = limited(lambda: Swarm(world, plugin, seed))
+            swarm = limited(lambda: Swarm(world, plugin, seed, params, faults=faults))
             runner = Runner(swarm, [watch], max_steps)
             while not runner.finished:
                 limited(runner.step)
