@@ -66,19 +66,27 @@ def main() -> int:
     parser.add_argument("--max-steps", type=int, default=15_000)
     parser.add_argument("--step-seconds", type=float, default=5.0)
     args = parser.parse_args()
+    if min(args.cases, args.max_steps, args.step_seconds) <= 0:
+        parser.error("--cases, --max-steps and --step-seconds must be more than 0")
     try:
         with PluginCode.named(args.strategy).running(" as it was loaded"):
             cls = strategies.get(args.strategy)
     except InputError as error:
         print(f"fuzz_programs.py: error: {error}", file=sys.stderr)
         return 2
-    found = 0
-    for number in range(args.first, args.first + args.cases):
-        problem = case(cls, number, args.max_steps, args.step_seconds)
-        if problem:
-            found += 1
-            print(problem, flush=True)
-    print(f"{args.strategy}: {args.cases} cases, {found} with a problem")
+    found = done = 0
+    try:
+        for number in range(args.first, args.first + args.cases):
+            problem = case(cls, number, args.max_steps, args.step_seconds)
+            done += 1
+            if problem:
+                found += 1
+                print(problem, flush=True)
+    except KeyboardInterrupt:  # Ctrl+C: say what the cases run so far found
+        print(f"{args.strategy}: stopped in case {args.first + done}, {done} cases, {found} "
+              "with a problem")  # fmt: skip
+        return 130
+    print(f"{args.strategy}: {done} cases, {found} with a problem")
     return 1 if found else 0
 
 
