@@ -45,6 +45,19 @@ def test_resuming_at_any_step_gives_the_uninterrupted_run(strategy, tmp_path):
         assert metrics_of(run(resumed, max_steps=50_000)) == whole, f"cut at step {cut}"
 
 
+def test_a_run_saved_before_its_program_kept_a_memory_slot_resumes_with_it_as_new(tmp_path):
+    """A state file of an older version lacks the slots a program added since (`mean-shift`'s
+    `walled`): each starts as a new robot's, and the run goes on as it would have."""
+    config = config_for("mean-shift")
+    whole = metrics_of(run(build(config), max_steps=50_000))
+    save(run(build(config), max_steps=23), tmp_path / "s.state", config)
+    manifest, arrays = state_members(tmp_path / "s.state")
+    del arrays["swarm.driver.memory.walled"]
+    (tmp_path / "old.state").write_bytes(state_bytes(manifest, arrays))
+    _, resumed = resume(tmp_path / "old.state")
+    assert metrics_of(run(resumed, max_steps=50_000)) == whole
+
+
 def test_the_paper_horseshoe_resumed_at_step_37_forms_as_if_never_stopped(tmp_path):
     """The reported case: the resumed run used to hold two copies of the occupancy grid."""
     common = [str(SHAPES / "horseshoe.png"), "--strategy", "paper", "--seed", "11", "--headless"]

@@ -370,3 +370,52 @@ def test_a_one_cell_piece_walled_in_by_pockets_forms_with_noise_and_lost_message
     swarm = Runner(start_swarm(config, world), [watch], max_steps=3000).finish()
     assert swarm.complete, run_metrics(swarm)
     assert watch.problems == []
+
+
+def test_a_hole_behind_a_stalled_robot_moves_along_the_rim_to_the_robots_outside():
+    """Every cell of a block filled but one in the middle of its far side, a robot stalled
+    right outside that one and a spare robot farther out: no robot outside can reach the hole,
+    and no robot inside moves to a cell as shallow as its own, so it stayed open for good;
+    the robot in place beside it takes it, and the spare comes in to the cell it left
+    (`holes.unwalled`)."""
+    grid = np.ones((4, 7), dtype=bool)
+    world = world_of(grid, int(grid.sum()) + 1)
+    targets, seeds = world.targets, world.seeds
+    side = np.argmax(np.abs(targets - seeds.mean(axis=0)).sum(axis=1))
+    low, high = targets.min(axis=0), targets.max(axis=0)
+    axis = int(targets[side, 0] in (low[0], high[0]))  # the far side runs along this axis
+    far = targets[:, 1 - axis] == targets[side, 1 - axis]
+    hole = targets[far][np.argsort(targets[far, axis])[int(far.sum()) // 2]]
+    out = hole.copy()
+    out[1 - axis] += 1 if hole[1 - axis] == high[1 - axis] else -1
+    spare = out.copy()
+    spare[1 - axis] += 3 if hole[1 - axis] == high[1 - axis] else -3
+    keep = ~(targets == hole).all(axis=1)
+    start = np.concatenate([targets[keep], [out, spare]])
+    stall = FaultEvent(0, "stall", region=(int(out[0]), int(out[1]), 1, 1))
+    config = RunConfig(strategy="mean-shift", seed=0, faults=(stall,))
+    swarm = Runner(start_swarm(config, world, start), [], max_steps=400).finish()
+    assert (swarm.state == STALLED).sum() == 1
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0
+
+
+FUZZED_STALLS = (
+    "########.## #..#######. ####..##### ########### ####.###.#. ########### ########..# "
+    "#######.### ##..#.#####"
+)
+
+
+def test_robots_walled_in_by_stalled_robots_go_round_them_to_the_empty_cells():
+    """Drawn at random (a fuzz, case 5): a fifth of the robots stall at step 55, and three of
+    those left outside stand in a bay that stalled robots wall off from every empty cell. No
+    cell they could walk to lay nearer along the way round the shape, so each stepped aside
+    and back for good (81 % at step 15,000); they go round the stalled robots now
+    (`explore.go_round`)."""
+    world = world_of(grid_from(FUZZED_STALLS), 88)
+    stall = FaultEvent(55, "stall", 0.18830150148731223)
+    config = RunConfig(strategy="mean-shift", seed=1056080274, faults=(stall,))
+    watch = InvariantWatch()
+    swarm = Runner(start_swarm(config, world), [watch], max_steps=3000).finish()
+    assert swarm.complete, run_metrics(swarm)
+    assert watch.problems == []

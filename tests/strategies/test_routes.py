@@ -66,3 +66,16 @@ def test_a_robot_far_off_the_map_has_no_route():
         shape, np.zeros(1, int), np.array([[60, 60]]), np.array([[0, 0]]), 3
     )
     assert not found[0]
+
+
+def test_a_routes_cost_falls_by_one_a_step_along_it_and_counts_the_shape_cells_it_crosses():
+    shape = blueprint_of(U)
+    start, target = (3, 5), (1, 1)
+    path = np.array(walk(shape, start, target))
+    cost = routes.costs(shape, np.zeros(1, int), path[None], np.array([target]))[0]
+    outside = cost[:-1]
+    assert (np.diff(outside) == -1).all()
+    assert cost[-1] < outside[-1]  # the last step, onto the target
+    assert cost[-1] > len(path)  # a shape cell costs more than any walk round the shape
+    off = routes.costs(shape, np.zeros(1, int), np.array([[[60, 60]]]), np.array([target]))
+    assert np.isinf(off).all()

@@ -390,6 +390,8 @@ class LocalControl:
     def restore(self, saved: Snapshot) -> None:
         n = len(self.swarm.cell)
         for name, slot in self.program.memory.items():
+            if not saved.has(f"memory.{name}"):  # added since the file was saved: as new
+                continue
             shape = (n,) if slot.width is None else (n, slot.width)
             value = saved.array(f"memory.{name}", slot.dtype, shape, finite=None)
             setattr(self.memory, name, value)

@@ -24,7 +24,7 @@ from swarmshape.core.perception import Blueprint, Boxes, Perception
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
 from swarmshape.strategies.skills.relay import best_per_robot
-from swarmshape.strategies.skills.view import paths
+from swarmshape.strategies.skills.view import SILENCE, paths
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
@@ -116,10 +116,6 @@ BIG = 1 << 40
 ROUNDABOUT = 2
 """How many times the straight way a stuck robot's way round the shape to an open cell must be
 before it calls open cells to it (see `_cut_off`)."""
-
-SILENCE = 10
-"""Steps a robot sees its goal's cell taken by a robot it does not hear before it gives the
-goal up (see `_give_up_to_the_silent`)."""
 
 
 @register

@@ -49,6 +49,20 @@ def waypoints(
     return out, found
 
 
+def costs(
+    blueprint: Blueprint, groups: np.ndarray, cells: np.ndarray, target: np.ndarray
+) -> np.ndarray:
+    """``(n, k)``: for each robot, the route cost to its `target` ``(n, 2)`` from each of its
+    frame `cells` ``(n, k, 2)`` (a way round the shape crossing fewer shape cells costs less,
+    then a shorter one; inf off the margin round the shape)."""
+    out = np.full(cells.shape[:2], np.inf)
+    for _, rows, low, size, fields, which in _grouped(blueprint, groups, target):
+        k = cells.shape[1]
+        at = (cells[rows] - low).reshape(-1, 2)
+        out[rows] = _distance(fields, np.repeat(which, k), at, size).reshape(-1, k)
+    return out
+
+
 def ways(
     blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, target: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -15,7 +15,8 @@ Each step a robot:
    the shape stays inside it and enters only cells deeper in it than its own, so that the
    empty cell it leaves lies nearer the robots outside, and one in place enters only a cell
    they cannot reach (`holes`), or, when a robot waits in a pocket the shape encloses, one
-   that carries a hole nearer to it (`holes.pulled`); a robot outside that can reach an empty
+   that carries a hole nearer to it (`holes.pulled`), or, on the rim, one that stalled
+   robots wall off from them (`holes.unwalled`); a robot outside that can reach an empty
    shape cell it senses takes only moves that bring it nearer one (`explore.nearer`); toward
    an empty cell of a piece that only pockets touch, a robot steps across the pocket
    (`holes.across_pockets`);
@@ -57,8 +58,9 @@ robot's pace (`lap_pace`): news older than that is of a cell long filled. At twi
 cell count (no path through the swarm is longer) robots followed such news for hundreds of
 steps: the 299-robot K took 2,271 steps, and 1,178 with the lap. Word that a news cell is
 taken travels the same way, so that news is dropped as soon as it is stale, not a lap later
-(`holes.open_news`). The kernel reaches one cell past the sensing radius; every other constant
-is the paper's or an option.
+(`holes.open_news`). The kernel reaches one cell past the sensing radius, and a robot takes
+a neighbour it has not heard for ten steps for stalled (`skills.view.SILENCE`, as `local-swap`
+does); every other constant is the paper's or an option.
 """
 
 from __future__ import annotations
@@ -118,6 +120,11 @@ class MeanShift(Program):
         "tour": Slot(np.int64, -1),
         "toured": Slot(np.int64, 0),
         "waited": Slot(np.int64, 0),
+        "walled": Slot(np.int64, 0, 4),
+        "rounding": Slot(np.int64, 0),
+        "facing": Slot(np.int64, 0),
+        "hit": Slot(np.float64, np.inf),
+        "round_to": Slot(np.int64, 0, 2),
     }
 
     @dataclass(frozen=True)
@@ -201,11 +208,17 @@ class MeanShift(Program):
         goal = np.where(heard[rows, None], memory.news[rows], shape.tour(
             blueprint, group[rows], memory.tour[rows])[0])  # fmt: skip
         way, found = routes.waypoints(blueprint, group[rows], base[rows], goal, int(sense.radius))
-        rows, way = rows[found], way[found]
+        rows, way, goal = rows[found], way[found], goal[found]
         command[rows] = options.entering * explore.unit(way - base[rows])
         toward = np.zeros((len(sense), len(STEPS) - 1), dtype=bool)
+        memory.facing = np.where(sense.heading > 0, sense.heading, memory.facing)
+        following = np.zeros(len(sense), dtype=bool)
+        following[rows] = options.entering > 0
+        memory.rounding[~following] = 0
         if options.entering > 0:
-            toward[rows] = explore.round_the_silent(sense, view, window, frame[rows], rows, way)
+            toward[rows] = explore.round_the_silent(
+                sense, memory, view, around, window, rows, way, goal, rng
+            )
         rows = np.flatnonzero(outside & sees)
         walls = explore.seeded(view.taken[rows], frame[rows])
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
@@ -333,6 +346,7 @@ class MeanShift(Program):
         met, empty = holes.open_holes(sense, around, said, view, into)
         drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
         inward = deeper & (~(met | empty) | drawn)
+        inward |= holes.unwalled(sense, memory, around, said, view, offset, open_ & in_shape)
         # a robot coming in beside a hole keeps it; one waiting in a pocket pulls the others
         pulling = inside & (pull < cap)
         to_pocket = open_ & in_shape & ~met

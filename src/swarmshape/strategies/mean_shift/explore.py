@@ -25,9 +25,11 @@ import functools
 import numpy as np
 import scipy
 
-from swarmshape.core.motion import STEPS
+from swarmshape.core.local import Memory
+from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import SEED_CELLS
+from swarmshape.strategies import routes
 from swarmshape.strategies.skills.shape import Around
 from swarmshape.strategies.skills.view import View, paths
 
@@ -147,24 +149,143 @@ def nearer(
     return np.stack(steps, axis=1)
 
 
+def square(reach: int) -> np.ndarray:
+    """The offsets of a square of half-width `reach`, row by row ``(1, side * side, 2)``: a
+    view square's cells, to look up for every robot at once."""
+    span = np.arange(-reach, reach + 1)
+    return np.stack(np.meshgrid(span, span, indexing="ij"), axis=-1).reshape(1, -1, 2)
+
+
 def round_the_silent(
     sense: Perception,
+    memory: Memory,
     view: View,
+    around: Around,
     window: Window,
-    frame: np.ndarray,
     robots: np.ndarray,
     way: np.ndarray,
+    target: np.ndarray,
+    rng: np.random.Generator,
 ) -> np.ndarray:
-    """``(k, 4)``: for `robots` on frame cells `frame` following a route round the shape to
-    its next waypoint `way`, the moves that bring each nearer the waypoint round the silent
-    robots it senses (stalled: they never make way, and a robot whose straight way one blocked
-    waited behind it for good) and the seeds; none when the waypoint lies beyond its window.
-    Robots that talk are left to make way."""
+    """``(k, 4)``: for `robots` following a route round the shape to `target` ``(k, 2)``, the
+    moves that bring each nearer its next waypoint `way` round the silent robots it senses
+    (stalled: they never make way, and a robot whose straight way one blocked waited behind
+    it for good) and the seeds; robots that talk are left to make way.
+
+    Where silent robots wall the waypoint off from a robot (with the seeds and the robots on
+    the shape, which never make way for it either), and while it goes round a wall, the
+    moves toward the cells it can walk to that lie least far along the route
+    (`routes.costs`); with none nearer than its base, it goes round what walls it in
+    (`go_round`). Aiming at the waypoint still, a robot in a
+    bay of stalled robots stepped aside and back for good (`fuzz_programs.py mean-shift`,
+    case 5)."""
+    frame = memory.frame[robots]
     entry = np.maximum(view.who[robots], 0)
     silent = (view.who[robots] >= 0) & ~sense.heard[entry] & ~sense.seed[entry]
-    goal = (window.offsets[None] == (way - frame)[:, None]).all(axis=2)
     walls = seeded(silent, frame)
-    return nearer(walls, base(sense)[robots], goal, window.offsets)
+    start, r, offsets = base(sense)[robots], view.reach, window.offsets
+    goal = (offsets[None] == (way - frame)[:, None]).all(axis=2)
+    moves = nearer(walls, start, goal, offsets)
+    side = 2 * r + 1
+    on_shape = around.contains(square(r))[robots].reshape(-1, side, side)
+    held = seeded(view.taken[robots] & on_shape, frame)
+    firm = held | silent
+    reached = _reached(firm, start, offsets)
+    walled = ~(goal & reached).any(axis=1) & (goal & _reached(held, start, offsets)).any(axis=1)
+    rows = np.flatnonzero(walled | (memory.rounding[robots] != 0))
+    if not len(rows):
+        return moves
+    blueprint, group = sense.blueprint, sense.group[robots[rows]]
+    cells = frame[rows, None] + offsets[None]
+    cost = np.where(reached[rows], routes.costs(blueprint, group, cells, target[rows]), np.inf)
+    here = routes.costs(blueprint, group, (frame + start)[rows, None], target[rows])[:, 0]
+    best = cost.min(axis=1, initial=np.inf)
+    nearest = (cost == best[:, None]) & (best < here)[:, None]
+    moves[rows] = nearer(firm[rows], start[rows], nearest, offsets)
+    passable = ~firm[rows] & sensed(offsets, r)
+    move = go_round(memory, robots[rows], passable, start[rows], way[rows], target[rows],
+                    here, best, rng)  # fmt: skip
+    rounding = rows[move > 0]
+    moves[rounding] = False
+    moves[rounding, move[move > 0] - 1] = True
+    return moves
+
+
+def _reached(walls: np.ndarray, start: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """``(k, m)``: which cells of the window `offsets` each robot can walk to from its base
+    `start` round `walls` (its view square) through cells it senses."""
+    r = walls.shape[1] // 2
+    origin = np.zeros_like(walls)
+    origin[np.arange(len(walls)), start[:, 0] + r, start[:, 1] + r] = True
+    steps = paths(walls | ~sensed(offsets, r), origin)[0]
+    return steps[:, offsets[:, 0] + r, offsets[:, 1] + r] >= 0
+
+
+def go_round(
+    memory: Memory,
+    robots: np.ndarray,
+    passable: np.ndarray,
+    start: np.ndarray,
+    way: np.ndarray,
+    target: np.ndarray,
+    here: np.ndarray,
+    best: np.ndarray,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """``(k,)``: the move of each of `robots` that goes round what walls it in, 0 for those
+    that need not (a bug algorithm: V. Lumelsky and A. Stepanov, "Path-planning strategies
+    for a point mobile automaton moving amidst unknown obstacles of arbitrary shape",
+    Algorithmica 2:403-430, 1987). A robot none of whose `passable` cells (its view square,
+    from its base `start`) lies nearer its `target` along the route than its base (cost
+    `here`; `best`, the least it can walk to) notes that cost, picks a hand at random, and
+    heads for its waypoint `way` until blocked, then turns so that what blocks it lies on
+    that hand. It keeps that hand on what it cannot pass: while any of the eight cells round
+    its base is such, it turns toward that hand where it can (round a corner), else goes on,
+    else turns away, else back; until it can walk to a cell nearer than the cost it noted.
+    The noted costs fall from one wall to the next, so it never goes round one twice."""
+    mine = memory.rounding[robots]
+    mine[(memory.round_to[robots] != target).any(axis=1)] = 0
+    mine[best < np.where(mine != 0, memory.hit[robots], here)] = 0
+    begin = np.flatnonzero((mine == 0) & (best >= here) & np.isfinite(here))
+    hand = rng.choice(np.array([1, -1]), size=len(begin))
+    mine[begin] = hand
+    memory.hit[robots[begin]] = here[begin]
+    memory.round_to[robots[begin]] = target[begin]
+    toward = way[begin] - memory.frame[robots[begin]] - start[begin]
+    ahead = np.where(
+        np.abs(toward[:, 0]) >= np.abs(toward[:, 1]),
+        np.where(toward[:, 0] >= 0, 1, 2),
+        np.where(toward[:, 1] >= 0, 3, 4),
+    )
+    turned = np.where(hand > 0, RIGHT[ahead], LEFT[ahead])  # what is ahead now on the hand
+    memory.facing[robots[begin]] = np.where(_free(passable, begin, start, ahead), ahead, turned)
+    memory.rounding[robots] = mine
+    going = np.flatnonzero(mine != 0)
+    facing = memory.facing[robots[going]]
+    turn_in = np.where(mine[going] > 0, LEFT[facing], RIGHT[facing])
+    r = passable.shape[1] // 2
+    x, y = start[going, 0] + r, start[going, 1] + r
+    near = np.zeros(len(going), dtype=bool)
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            near |= ~passable[going, np.clip(x + dx, 0, 2 * r), np.clip(y + dy, 0, 2 * r)]
+    move = np.zeros(len(robots), dtype=np.int64)
+    chosen = np.zeros(len(going), dtype=np.int64)
+    options = (REVERSE[turn_in], facing, turn_in)  # least wanted first: the last free wins
+    for option, allowed in zip(options, (True, True, near), strict=True):
+        chosen = np.where(_free(passable, going, start, option) & allowed, option, chosen)
+    back = (chosen == 0) & _free(passable, going, start, REVERSE[facing])
+    move[going] = np.where(back, REVERSE[facing], chosen)
+    return move
+
+
+def _free(passable: np.ndarray, rows: np.ndarray, start: np.ndarray, way: np.ndarray) -> np.ndarray:
+    """Whether the cell a step `way` from each robot's base `start` is `passable` (rows of its
+    view squares)."""
+    r = passable.shape[1] // 2
+    x, y = (start[rows] + STEPS[way] + r).T
+    inside = (x >= 0) & (x <= 2 * r) & (y >= 0) & (y <= 2 * r)
+    return inside & passable[rows, np.clip(x, 0, 2 * r), np.clip(y, 0, 2 * r)]
 
 
 def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:

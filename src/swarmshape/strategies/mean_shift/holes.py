@@ -16,7 +16,9 @@ robot on its way, and a new part drawn beside a formed shape moved robots on its
 
 A robot outside that senses no empty cell, beside the shape with its rim full (or at another
 piece of it), follows news of an empty rim cell that robots inside see with nobody outside in
-sight of it (a relay), round the shape (`swarmshape.strategies.routes`).
+sight of it (a relay), round the shape (`swarmshape.strategies.routes`). A rim hole that only
+stalled robots stand beside outside moves a step along the rim to where robots outside can
+reach it (`unwalled`).
 
 A robot in a pocket the shape encloses (a ring's middle) can come in only through the
 pocket's rim, where holes, carried outward, never go: once the rim round it is full it waits
@@ -48,7 +50,7 @@ from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 from swarmshape.strategies.mean_shift import explore
 from swarmshape.strategies.skills import relay, shape
-from swarmshape.strategies.skills.view import View
+from swarmshape.strategies.skills.view import SILENCE, View
 
 
 def open_holes(
@@ -79,6 +81,40 @@ def open_holes(
     return met.reshape(n, k), empty.reshape(n, k)
 
 
+def unwalled(
+    sense: Perception,
+    memory: Memory,
+    around: shape.Around,
+    said: SimpleNamespace,
+    view: View,
+    base: np.ndarray,
+    holes: np.ndarray,
+) -> np.ndarray:
+    """``(n, 4)``: whether each robot at rest on a rim cell (`shape.depth` 1) takes the
+    empty rim cell each way from it (`holes` ``(n, 4)``) that robots outside cannot reach,
+    every cell beside it outside held by a robot it has not heard for `SILENCE` steps
+    (stalled: it never steps in), while they can reach its own: the hole it leaves is
+    theirs. No robot inside moves to a cell as shallow as its own, so a hole behind a
+    stalled robot stayed open for good, and robots outside came to it and waited
+    (`fuzz_programs.py mean-shift`, case 5). The hole it fills stays walled, so no robot
+    carries it back. A rim hole whose neighbours on the rim are walled too stays open, and
+    so does one deeper in whose shallower neighbours stalled robots hold."""
+    n = len(sense)
+    ways = base[:, None, :] + STEPS[1:][None]
+    rows = np.repeat(np.arange(n), len(STEPS) - 1)
+    silent = np.append(~sense.heard & ~sense.seed, False)  # per entry; False for none
+    walled = holes & (around.depth(ways) == 1)
+    for step in STEPS[1:]:
+        beside = ways + step
+        taken, who = view.at(rows, beside.reshape(-1, 2))
+        out = (around.depth(beside) == 0).ravel()
+        walled &= (~out | (taken & silent[who])).reshape(n, -1)
+    memory.walled = np.where(walled & sense.ready[:, None], memory.walled + 1, 0)
+    met, empty = open_holes(sense, around, said, view, base[:, None, :])
+    mine = (around.depth(base) == 1) & (met | empty)[:, 0]
+    return (memory.walled >= SILENCE) & mine[:, None]
+
+
 def across_pockets(
     sense: Perception,
     said: SimpleNamespace,
@@ -106,8 +142,7 @@ def across_pockets(
     cell it left filled from the outer ring, which stayed a cell short."""
     # the view's square and a cell round it, for the cells beside those of robots in it
     reach = view.reach + 1
-    span = np.arange(-reach, reach + 1)
-    square = np.stack(np.meshgrid(span, span, indexing="ij"), axis=-1).reshape(1, -1, 2)
+    square = explore.square(reach)
     inside = around.contains(square)[robots].reshape(-1, 2 * reach + 1, 2 * reach + 1)
     pockets = around.enclosed(square)[robots].reshape(inside.shape)
     depth = np.where(inside, around.depth(square)[robots].reshape(inside.shape), 0)

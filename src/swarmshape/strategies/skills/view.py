@@ -13,6 +13,11 @@ from swarmshape.core.compiled import njit
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 
+SILENCE = 10
+"""Steps a robot sees a neighbour it does not hear before it takes it for stalled: a stalled
+robot is silent and holds its cell for good, while a live one goes unheard that long only
+with chance ``msg_loss ** SILENCE``."""
+
 
 class View:
     """Per robot, the square of cells within `reach` round its own cell: which hold something
