@@ -68,6 +68,8 @@ def test_the_square_round_each_frame_cell_holds_what_a_lookup_of_each_cell_gives
     assert np.array_equal(around.contains(every), inside)
     assert np.array_equal(around.contains(offsets[7] + 0 * frame), inside[:, 7])
     assert np.array_equal(around.enclosed(every), (depth > 0) & ~inside)
+    some = np.array([3, 17, 39])
+    assert np.array_equal(around.depth(every[some], some), depth[some])
 
 
 def test_a_cell_beyond_the_square_worked_out_is_refused_not_wrapped_round():

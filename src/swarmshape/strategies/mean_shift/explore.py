@@ -186,23 +186,29 @@ def round_the_silent(
     start, r, offsets = base(sense)[robots], view.reach, window.offsets
     goal = (offsets[None] == (way - frame)[:, None]).all(axis=2)
     moves = nearer(walls, start, goal, offsets)
+    # only silent robots in sight, or a wall being gone round, can call for more
+    rows = np.flatnonzero(silent.any(axis=(1, 2)) | (memory.rounding[robots] != 0))
+    if not len(rows):
+        return moves
     side = 2 * r + 1
-    on_shape = around.contains(square(r))[robots].reshape(-1, side, side)
-    held = seeded(view.taken[robots] & on_shape, frame)
-    firm = held | silent
-    reached = _reached(firm, start, offsets)
-    walled = ~(goal & reached).any(axis=1) & (goal & _reached(held, start, offsets)).any(axis=1)
-    rows = np.flatnonzero(walled | (memory.rounding[robots] != 0))
+    on_shape = around.contains(square(r))[robots[rows]].reshape(-1, side, side)
+    held = seeded(view.taken[robots[rows]] & on_shape, frame[rows])
+    firm = held | silent[rows]
+    reached = _reached(firm, start[rows], offsets)
+    open_way = (goal[rows] & reached).any(axis=1)
+    walled = ~open_way & (goal[rows] & _reached(held, start[rows], offsets)).any(axis=1)
+    keep = walled | (memory.rounding[robots[rows]] != 0)
+    rows, firm, reached = rows[keep], firm[keep], reached[keep]
     if not len(rows):
         return moves
     blueprint, group = sense.blueprint, sense.group[robots[rows]]
     cells = frame[rows, None] + offsets[None]
-    cost = np.where(reached[rows], routes.costs(blueprint, group, cells, target[rows]), np.inf)
+    cost = np.where(reached, routes.costs(blueprint, group, cells, target[rows]), np.inf)
     here = routes.costs(blueprint, group, (frame + start)[rows, None], target[rows])[:, 0]
     best = cost.min(axis=1, initial=np.inf)
     nearest = (cost == best[:, None]) & (best < here)[:, None]
-    moves[rows] = nearer(firm[rows], start[rows], nearest, offsets)
-    passable = ~firm[rows] & sensed(offsets, r)
+    moves[rows] = nearer(firm, start[rows], nearest, offsets)
+    passable = ~firm & sensed(offsets, r)
     move = go_round(memory, robots[rows], passable, start[rows], way[rows], target[rows],
                     here, best, rng)  # fmt: skip
     rounding = rows[move > 0]

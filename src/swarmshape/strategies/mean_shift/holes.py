@@ -99,20 +99,26 @@ def unwalled(
     (`fuzz_programs.py mean-shift`, case 5). The hole it fills stays walled, so no robot
     carries it back. A rim hole whose neighbours on the rim are walled too stays open, and
     so does one deeper in whose shallower neighbours stalled robots hold."""
-    n = len(sense)
     ways = base[:, None, :] + STEPS[1:][None]
-    rows = np.repeat(np.arange(n), len(STEPS) - 1)
+    walled = holes & (around.depth(ways) == 1) & sense.ready[:, None]
+    robots = np.flatnonzero(walled.any(axis=1))  # the few at rest beside a hole on the rim
+    walled, ways = walled[robots], ways[robots]
+    rows = np.repeat(robots, len(STEPS) - 1)
     silent = np.append(~sense.heard & ~sense.seed, False)  # per entry; False for none
-    walled = holes & (around.depth(ways) == 1)
     for step in STEPS[1:]:
         beside = ways + step
         taken, who = view.at(rows, beside.reshape(-1, 2))
-        out = (around.depth(beside) == 0).ravel()
-        walled &= (~out | (taken & silent[who])).reshape(n, -1)
-    memory.walled = np.where(walled & sense.ready[:, None], memory.walled + 1, 0)
+        out = (around.depth(beside, robots) == 0).ravel()
+        walled &= (~out | (taken & silent[who])).reshape(walled.shape)
+    counts = np.zeros_like(memory.walled)
+    counts[robots] = np.where(walled, memory.walled[robots] + 1, 0)
+    memory.walled = counts
+    due = memory.walled >= SILENCE
+    if not due.any():
+        return due
     met, empty = open_holes(sense, around, said, view, base[:, None, :])
     mine = (around.depth(base) == 1) & (met | empty)[:, 0]
-    return (memory.walled >= SILENCE) & mine[:, None]
+    return due & mine[:, None]
 
 
 def across_pockets(

@@ -45,8 +45,9 @@ class Around:
     def contains(self, offsets: np.ndarray) -> np.ndarray:
         return self._at(self._inside, offsets)
 
-    def depth(self, offsets: np.ndarray) -> np.ndarray:
-        return self._at(self._depth, offsets)
+    def depth(self, offsets: np.ndarray, robots: np.ndarray | None = None) -> np.ndarray:
+        """Per robot (of `robots` only, if given, their offsets ``(k, ..., 2)``)."""
+        return self._at(self._depth, offsets, robots)
 
     def sealed(self, offsets: np.ndarray) -> np.ndarray:
         """Whether each cell lies in a piece of the shape that touches no cell of the outside,
@@ -65,17 +66,20 @@ class Around:
         encloses: a robot there can come in only through the pocket's own rim."""
         return (self.depth(offsets) > 0) & ~self.contains(offsets)
 
-    def _at(self, square: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-        """`square`'s values at `offsets`: per robot ``(n, ..., 2)``, or the same for every
-        robot ``(1, k, 2)``. A program looks up two dozen sets of cells a step, so each is
-        one gather from the squares laid end to end."""
+    def _at(
+        self, square: np.ndarray, offsets: np.ndarray, robots: np.ndarray | None = None
+    ) -> np.ndarray:
+        """`square`'s values at `offsets`: per robot ``(n, ..., 2)`` (or per robot of
+        `robots`), or the same for every robot ``(1, k, 2)``. A program looks up two dozen
+        sets of cells a step, so each is one gather from the squares laid end to end."""
         n, side = square.shape[:2]
         if np.abs(offsets).max(initial=0) > self.reach:
             raise ValueError(f"an offset lies beyond the {self.reach} cells worked out")
         index = (offsets[..., 0] + self.reach) * side + (offsets[..., 1] + self.reach)
-        if index.ndim == 2 and len(index) == 1:
+        if robots is None and index.ndim == 2 and len(index) == 1:
             return square.reshape(n, -1)[:, index[0]]
-        rows = np.arange(n).reshape(-1, *[1] * (index.ndim - 1)) * (side * side)
+        rows = np.arange(n) if robots is None else robots
+        rows = rows.reshape(-1, *[1] * (index.ndim - 1)) * (side * side)
         return square.reshape(-1)[rows + index]
 
 
