@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import sys
+import time
 
 import numpy as np
 import pytest
 
-from swarmshape.check import check_strategy
+from swarmshape.check import StepTooLong, _time_limit, check_strategy
 from swarmshape.cli import main
+from swarmshape.core import compiled
 from swarmshape.core.steering import Strategy
 from swarmshape.strategies import available
 from swarmshape.strategies.concurrent import Optimal
@@ -176,6 +178,31 @@ def test_check_stops_a_step_that_never_ends():
     assert report.problems[0].endswith(
         "step 2 took over 3 s (is the strategy caught in a loop?); the check stopped it"
     )
+
+
+def _plus_one(x: int) -> int:
+    return x + 1
+
+
+def test_a_kernel_compiling_in_a_step_is_not_taken_for_a_loop(monkeypatch):
+    """A cold numba cache compiles the project's kernels in a run's first steps, for seconds on
+    a loaded machine: the limit on a step stopped it inside numba, which broke it (a traceback
+    from scripts/fuzz_programs.py --step-seconds 1 in a fresh clone)."""
+    import numba
+
+    def slow_njit(**_: object):
+        def compile_kernel(python):
+            time.sleep(0.5)
+            return python
+
+        return compile_kernel
+
+    monkeypatch.setattr(numba, "njit", slow_njit)
+    kernel = compiled.njit(_plus_one)
+    with _time_limit(0.1) as limited:
+        assert limited(lambda: kernel(1)) == 2
+        with pytest.raises(StepTooLong):
+            limited(lambda: time.sleep(0.5))
 
 
 def test_code_that_fails_as_it_loads_is_its_own_failure(tmp_path, capsys):

@@ -29,6 +29,7 @@ from typing import TypeVar
 import numpy as np
 
 from swarmshape import strategies
+from swarmshape.core import compiled
 from swarmshape.core.audit import overlapping_pairs
 from swarmshape.core.faults import Faults
 from swarmshape.core.guard import PluginCode
@@ -264,6 +265,8 @@ def _time_limit(seconds: float) -> Iterator[Callable[[Callable[[], T]], T]]:
         return
 
     def stop(*_: object) -> None:
+        if compiled.compiling():  # the timer fires again; raised inside numba, it broke it
+            return
         raise StepTooLong
 
     def limited(call: Callable[[], T]) -> T:

@@ -16,6 +16,17 @@ from typing import Any, TypeVar, cast
 F = TypeVar("F", bound=Callable[..., Any])
 
 
+_compiling = 0
+"""Kernels being compiled now (a kernel compiles the kernels it calls first)."""
+
+
+def compiling() -> bool:
+    """Whether a kernel is being compiled, or loaded from numba's cache, now: a time limit on
+    a step (`swarmshape check`) counts the strategy's work, not this, which takes seconds
+    on a cold cache."""
+    return _compiling > 0
+
+
 class _Kernel:
     """A kernel not compiled yet: calling it compiles it, then calls the compiled function."""
 
@@ -25,7 +36,14 @@ class _Kernel:
         self.compiled: Callable[..., Any] | None = None
 
     def __call__(self, *args: Any) -> Any:
-        return self.compile()(*args)
+        if self.compiled is not None:
+            return self.compiled(*args)
+        global _compiling
+        _compiling += 1
+        try:  # numba compiles at the first call, for its arguments' types
+            return self.compile()(*args)
+        finally:
+            _compiling -= 1
 
     def compile(self) -> Callable[..., Any]:
         if self.compiled is None:
