@@ -10,7 +10,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 from PIL import Image
+
+from swarmshape.core.shape import Shape
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -98,3 +101,18 @@ def test_the_fuzz_of_programs_reports_a_case_that_does_not_form_and_fails():
     assert line.startswith("case 5 (84 cells, 88 robots, noise 0, faults [FaultEvent(step=55")
     assert re.search(r": not formed after 200 steps \(coverage \d+%\)$", line), line
     assert summary == "mean-shift: 1 cases, 1 with a problem"
+
+
+def test_the_fuzz_of_a_program_that_grows_from_the_seeds_draws_only_what_it_can_form():
+    """Drawn whole, case 3's shape has cells that no swarm growing from the seeds reaches, so
+    `self-assembly` stood short on it (and on nearly every case) whatever it did."""
+    rng = np.random.default_rng(3)  # case 3's first draws, as the script makes them
+    height, width = rng.integers(3, 13, size=2)
+    grid = rng.random((height, width)) < rng.uniform(0.4, 0.95)
+    grid[rng.integers(height), rng.integers(width)] = True
+    whole, solid = Shape(grid).count, Shape(grid).solid().count
+    assert solid < whole
+    command = [sys.executable, "scripts/fuzz_programs.py", "self-assembly", "--first", "3"]
+    command += ["--cases", "1", "--max-steps", "1"]
+    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.stdout.startswith(f"case 3 ({solid} cells, "), done.stdout + done.stderr
