@@ -9,13 +9,19 @@ import warnings
 import numpy as np
 import pytest
 
-from swarmshape.config import configure
+from swarmshape.config import RunConfig, configure
+from swarmshape.core.faults import FaultEvent, Faults
 from swarmshape.core.metrics import run_metrics
+from swarmshape.core.shape import Shape
+from swarmshape.core.states import STALLED
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.errors import InputError
 from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import Runner, build, run
+from swarmshape.strategies import create
 from swarmshape.strategies.self_assembly import JOINED, WAIT, SelfAssembly
-from tests.conftest import SHAPES
+from tests.conftest import SHAPES, grid_from
 
 
 def formed(shape: str, **options):
@@ -100,3 +106,20 @@ def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_pat
         configure(SHAPES / "square.png", start="pakced")
     cells = tmp_path / "start.csv"  # as the environment and scripts pass it
     assert configure(SHAPES / "square.png", start=str(cells)).start == cells
+
+
+def test_robots_beside_a_stalled_robot_go_round_it():
+    """Drawn at random (`scripts/fuzz_programs.py self-assembly`, case 8): a robot stalls at
+    step 161 beside the seeds, on the way round them. It is never heard, so the robots beside
+    it waited to hear it for good (40 % at step 15,000); taken for stalled once unheard for
+    `SILENCE` steps, it is a wall they go round."""
+    fuzzed = ".#..#. ##.### #.##.. ..#### ###... #####. ..#... ##..#. #....# .##.##"
+    shape = Shape(grid_from(fuzzed)).solid()
+    world = build_world([GroupSpec("fuzz", shape, (1, 2, 3), 6)])
+    params = RunConfig(msg_loss=0.1, distance_noise=0.1).params()
+    faults = Faults((FaultEvent(161, "stall", 0.129733401782276),))
+    swarm = Swarm(world, create("self-assembly"), 1536917474, params, faults=faults)
+    swarm = run(swarm, max_steps=3000)
+    assert (swarm.state == STALLED).sum() == 1
+    assert swarm.complete, run_metrics(swarm)
+    assert swarm.overlap_total == 0

@@ -39,7 +39,7 @@ from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
-from swarmshape.strategies.skills.view import paths
+from swarmshape.strategies.skills.view import SILENCE, paths
 
 START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
@@ -135,6 +135,7 @@ class SelfAssembly(Program):
         "travelled": Slot(np.int64, 0),
         "want": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
+        "unheard": Slot(np.int64, 0, 25),
     }
 
     def act(
@@ -221,6 +222,7 @@ def _busy(near: _Near, memory: Memory) -> np.ndarray:
     resting = (state == JOINED) | (state == STOPPED)
     resting |= ((state == WAIT) | (state == START)) & near.crowded
     memory.known[resting] = -1
+    memory.unheard[resting] = 0
     memory.eligible[resting] = 0
     memory.since_loss = np.where(near.missed, 0, memory.since_loss + 1)
     return np.flatnonzero(~resting)
@@ -275,8 +277,11 @@ class _View:
     wall to follow), ``mover`` (a robot heard moving), ``joined`` and their ``gradient``.
     Stationary neighbours heard before stay known while the robot has not moved and their cell
     stays taken, so a lost message does not hide a wall; ``unknown`` cells are taken by a robot
-    not heard yet. Also, from everything it senses: ``mover_near`` (a moving robot heard)
-    and ``outranked`` (a waiting robot heard that goes first)."""
+    not heard yet, and ``stalled`` ones by a robot not heard for `SILENCE` steps while this one
+    stood still (it never moves: a wall to go round, not a robot to wait for; waiting for it,
+    the robots beside a stalled one stood still for good). Also, from everything it senses:
+    ``mover_near`` (a moving robot heard) and ``outranked`` (a waiting robot heard that goes
+    first)."""
 
     def __init__(
         self, near: _Near, sense: Perception, memory: Memory, moved: np.ndarray, rows: np.ndarray
@@ -347,7 +352,12 @@ class _View:
         foreign = np.zeros(a * 25, dtype=bool)
         foreign[(base + slot)[~near.kin[keep]]] = True
         self.foreign = foreign.reshape(a, 25)
-        self.unknown = self.taken & ~still_there & ~self.mover & ~self.foreign
+        unknown = self.taken & ~still_there & ~self.mover & ~self.foreign
+        unheard = memory.unheard[rows]
+        unheard[moved[rows]] = 0
+        memory.unheard[rows] = np.where(unknown, unheard + 1, 0)
+        self.stalled = memory.unheard[rows] >= SILENCE
+        self.unknown = unknown & ~self.stalled
         facing = np.zeros(a * 25, dtype=bool)
         facing[(base + slot)[near.facing[keep]]] = True
         self.facing = facing.reshape(a, 25)
@@ -461,11 +471,12 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     choice = np.zeros(n, dtype=np.int64)
     way = np.zeros(n, dtype=np.int64)  # the same, passing by a follower that faces this one
     heading = np.where(memory.heading > 0, memory.heading, 1)
+    walls = view.stationary | view.stalled
     for turn in (RIGHT, np.arange(5), LEFT, REVERSE):
         d = turn[heading]
         target = AHEAD[d]
-        wall = view.stationary[rows, target]
-        contact = view.stationary[rows[:, None], AROUND[d]].any(axis=1)
+        wall = walls[rows, target]
+        contact = walls[rows[:, None], AROUND[d]].any(axis=1)
         fits = (choice == 0) & ~wall & contact
         choice[fits] = d[fits]
         fits = (way == 0) & ~wall & ~view.facing[rows, target] & ~view.foreign[rows, target]
