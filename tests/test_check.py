@@ -187,22 +187,29 @@ def _plus_one(x: int) -> int:
 def test_a_kernel_compiling_in_a_step_is_not_taken_for_a_loop(monkeypatch):
     """A cold numba cache compiles the project's kernels in a run's first steps, for seconds on
     a loaded machine: the limit on a step stopped it inside numba, which broke it (a traceback
-    from scripts/fuzz_programs.py --step-seconds 1 in a fresh clone)."""
+    from scripts/fuzz_programs.py --step-seconds 1 in a fresh clone), and then stopped a step
+    whose own work, after the compiling, was well within it."""
     import numba
 
     def slow_njit(**_: object):
         def compile_kernel(python):
-            time.sleep(0.5)
+            time.sleep(1.2)  # past two ticks of the limit's timer
             return python
 
         return compile_kernel
 
     monkeypatch.setattr(numba, "njit", slow_njit)
     kernel = compiled.njit(_plus_one)
-    with _time_limit(0.1) as limited:
-        assert limited(lambda: kernel(1)) == 2
+
+    def compiles_then_works() -> int:
+        value = kernel(1)
+        time.sleep(0.35)  # across the next tick, within the limit of its own
+        return value
+
+    with _time_limit(0.5) as limited:
+        assert limited(compiles_then_works) == 2
         with pytest.raises(StepTooLong):
-            limited(lambda: time.sleep(0.5))
+            limited(lambda: time.sleep(1.0))
 
 
 def test_code_that_fails_as_it_loads_is_its_own_failure(tmp_path, capsys):

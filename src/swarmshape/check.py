@@ -21,6 +21,7 @@ import hashlib
 import signal
 import tempfile
 import threading
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -264,12 +265,22 @@ def _time_limit(seconds: float) -> Iterator[Callable[[Callable[[], T]], T]]:
         yield lambda call: call()
         return
 
+    began = [0.0, 0.0]  # when the call began, and the seconds spent compiling by then
+
     def stop(*_: object) -> None:
-        if compiled.compiling():  # the timer fires again; raised inside numba, it broke it
+        """Stop the call, unless numba is compiling one of the project's kernels (raised in
+        there, it broke numba) or did for part of the time: the timer fires again once the
+        call's own time is up."""
+        if compiled.compiling():
+            return
+        spent = time.perf_counter() - began[0] - (compiled.compile_seconds() - began[1])
+        if spent < seconds:
+            signal.setitimer(signal.ITIMER_REAL, seconds - spent, seconds)
             return
         raise StepTooLong
 
     def limited(call: Callable[[], T]) -> T:
+        began[:] = [time.perf_counter(), compiled.compile_seconds()]
         signal.setitimer(signal.ITIMER_REAL, seconds, seconds)  # again, if it is swallowed
         try:
             return call()

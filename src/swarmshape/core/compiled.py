@@ -10,6 +10,7 @@ numba's code.
 from __future__ import annotations
 
 import functools
+import time
 from collections.abc import Callable
 from typing import Any, TypeVar, cast
 
@@ -18,6 +19,8 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _compiling = 0
 """Kernels being compiled now (a kernel compiles the kernels it calls first)."""
+_compile_seconds = 0.0
+"""Seconds spent in kernels' first calls, which compile them, so far."""
 
 
 def compiling() -> bool:
@@ -25,6 +28,11 @@ def compiling() -> bool:
     a step (`swarmshape check`) counts the strategy's work, not this, which takes seconds
     on a cold cache."""
     return _compiling > 0
+
+
+def compile_seconds() -> float:
+    """Seconds spent compiling kernels (in their first calls) so far, in this process."""
+    return _compile_seconds
 
 
 class _Kernel:
@@ -38,12 +46,15 @@ class _Kernel:
     def __call__(self, *args: Any) -> Any:
         if self.compiled is not None:
             return self.compiled(*args)
-        global _compiling
+        global _compiling, _compile_seconds
         _compiling += 1
+        began = time.perf_counter()
         try:  # numba compiles at the first call, for its arguments' types
             return self.compile()(*args)
         finally:
             _compiling -= 1
+            if not _compiling:  # a kernel's first call holds those of the kernels it calls
+                _compile_seconds += time.perf_counter() - began
 
     def compile(self) -> Callable[..., Any]:
         if self.compiled is None:
