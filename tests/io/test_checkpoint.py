@@ -56,6 +56,10 @@ def test_a_run_saved_before_its_program_kept_a_memory_slot_resumes_with_it_as_ne
     (tmp_path / "old.state").write_bytes(state_bytes(manifest, arrays))
     _, resumed = resume(tmp_path / "old.state")
     assert metrics_of(run(resumed, max_steps=50_000)) == whole
+    del arrays["swarm.driver.memory.frame"]  # a slot it always kept: the file is damaged
+    (tmp_path / "old.state").write_bytes(state_bytes(manifest, arrays))
+    with pytest.raises(InputError, match=re.escape("memory.frame is missing")):
+        resume(tmp_path / "old.state")
 
 
 def test_the_paper_horseshoe_resumed_at_step_37_forms_as_if_never_stopped(tmp_path):

@@ -48,11 +48,14 @@ to rest for good (a program that builds an imperfect shape stops there)."""
 @dataclass(frozen=True)
 class Slot:
     """One array of per-robot memory a program declares: its dtype, starting value, and width
-    (None: one value per robot; k: ``(n, k)``)."""
+    (None: one value per robot; k: ``(n, k)``), and whether a program added it after runs were
+    saved without it (`added`: a state file that lacks it restores it as a new robot's; one
+    that lacks any other slot is damaged)."""
 
     dtype: type
     fill: Any = 0
     width: int | None = None
+    added: bool = False
 
 
 class Schema:
@@ -390,7 +393,7 @@ class LocalControl:
     def restore(self, saved: Snapshot) -> None:
         n = len(self.swarm.cell)
         for name, slot in self.program.memory.items():
-            if not saved.has(f"memory.{name}"):  # added since the file was saved: as new
+            if slot.added and not saved.has(f"memory.{name}"):  # saved before: as new
                 continue
             shape = (n,) if slot.width is None else (n, slot.width)
             value = saved.array(f"memory.{name}", slot.dtype, shape, finite=None)

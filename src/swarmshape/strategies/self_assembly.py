@@ -135,7 +135,7 @@ class SelfAssembly(Program):
         "travelled": Slot(np.int64, 0),
         "want": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
-        "unheard": Slot(np.int64, 0, 25),
+        "unheard": Slot(np.int64, 0, 25, added=True),
     }
 
     def act(

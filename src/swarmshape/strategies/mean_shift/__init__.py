@@ -120,11 +120,11 @@ class MeanShift(Program):
         "tour": Slot(np.int64, -1),
         "toured": Slot(np.int64, 0),
         "waited": Slot(np.int64, 0),
-        "walled": Slot(np.int64, 0, 4),
-        "rounding": Slot(np.int64, 0),
-        "facing": Slot(np.int64, 0),
-        "hit": Slot(np.float64, np.inf),
-        "round_to": Slot(np.int64, 0, 2),
+        "walled": Slot(np.int64, 0, 4, added=True),
+        "rounding": Slot(np.int64, 0, added=True),
+        "facing": Slot(np.int64, 0, added=True),
+        "hit": Slot(np.float64, np.inf, added=True),
+        "round_to": Slot(np.int64, 0, 2, added=True),
     }
 
     @dataclass(frozen=True)
