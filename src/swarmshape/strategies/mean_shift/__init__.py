@@ -58,9 +58,10 @@ robot's pace (`lap_pace`): news older than that is of a cell long filled. At twi
 cell count (no path through the swarm is longer) robots followed such news for hundreds of
 steps: the 299-robot K took 2,271 steps, and 1,178 with the lap. Word that a news cell is
 taken travels the same way, so that news is dropped as soon as it is stale, not a lap later
-(`holes.open_news`). The kernel reaches one cell past the sensing radius, and a robot takes
-a neighbour it has not heard for ten steps for stalled (`skills.view.SILENCE`, as `local-swap`
-does); every other constant is the paper's or an option.
+(`holes.open_news`). The kernel reaches one cell past the sensing radius, and a rim hole that
+robots it does not hear have walled off for ten steps in a row counts as walled off by stalled
+ones (`skills.view.SILENCE`, as `local-swap` and `self-assembly` count); every other constant
+is the paper's or an option.
 """
 
 from __future__ import annotations
