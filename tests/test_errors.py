@@ -77,6 +77,7 @@ def bad_files(tmp_path_factory) -> Path:
         "[[groups]]\nname = 'a'\nshape = 'one.png'\n[[groups]]\nname = 'a'\nshape = 'one.png'\n"
     )
     (folder / "code.toml").write_text("strategy = 'this:X'\n[[groups]]\nshape = 'one.png'\n")
+    (folder / "top-shape.toml").write_text("shape = 'one.png'\n[[groups]]\nshape = 'one.png'\n")
     (folder / "code-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['evil:X']\n")
     (folder / "nope-sweep.toml").write_text("shapes = ['one.png']\nstrategies = ['nope']\n")
     (folder / "faults.toml").write_text(
