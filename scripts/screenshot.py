@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
@@ -17,12 +18,13 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import pygame
 
 from swarmshape.config import configure
+from swarmshape.errors import InputError
 from swarmshape.runs import load_world, start_cells, start_swarm
 from swarmshape.ui.render import OVERLAYS
 from swarmshape.ui.viewer import Viewer
 
 
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("path", type=Path)
     parser.add_argument("--steps", type=int, default=1000)
@@ -39,8 +41,13 @@ def main() -> None:
     options = vars(args)
     path, out = options.pop("path"), options.pop("out")
     options["size"], options["overlays"] = tuple(args.size), options.pop("overlay")
-    step = shoot(path, out, **options)
+    try:
+        step = shoot(path, out, **options)
+    except InputError as error:  # a bad shape or scenario: one line, as the command line says it
+        print(f"screenshot.py: {error}", file=sys.stderr)
+        return 2
     print(f"{out}: step {step}")
+    return 0
 
 
 def shoot(
@@ -80,4 +87,4 @@ def shoot(
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
