@@ -112,7 +112,7 @@ def scenario_settings(path: str | Path) -> dict[str, Any]:
     data, _ = _read_toml(path)
     if "shape" in data:  # a run setting elsewhere; here the file is the shape
         raise ScenarioError(
-            f"{path}: a scenario names its images in [[groups]] (shape = \"...\" in each), "
+            f'{path}: a scenario names its images in [[groups]] (shape = "..." in each), '
             "not as a top-level shape"
         )
     return {key: value for key, value in data.items() if key not in ("name", "groups")}
