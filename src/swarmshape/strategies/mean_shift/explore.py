@@ -177,9 +177,8 @@ def round_the_silent(
     the shape, which never make way for it either), and while it goes round a wall, the
     moves toward the cells it can walk to that lie least far along the route
     (`routes.costs`); with none nearer than its base, it goes round what walls it in
-    (`go_round`). Aiming at the waypoint still, a robot in a
-    bay of stalled robots stepped aside and back for good (`fuzz_programs.py mean-shift`,
-    case 5)."""
+    (`go_round`). Aiming at the waypoint still, a robot in a bay of stalled robots stepped
+    aside and back for good (`fuzz_programs.py mean-shift`, case 5)."""
     frame = memory.frame[robots]
     entry = np.maximum(view.who[robots], 0)
     silent = (view.who[robots] >= 0) & ~sense.heard[entry] & ~sense.seed[entry]

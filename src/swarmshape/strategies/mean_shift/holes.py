@@ -92,7 +92,7 @@ def unwalled(
 ) -> np.ndarray:
     """``(n, 4)``: whether each robot at rest on a rim cell (`shape.depth` 1) takes the
     empty rim cell each way from it (`holes` ``(n, 4)``) that robots outside cannot reach,
-    every cell beside it outside held by a robot it has not heard for `SILENCE` steps
+    every cell beside it outside held, `SILENCE` steps in a row, by a robot it does not hear
     (stalled: it never steps in), while they can reach its own: the hole it leaves is
     theirs. No robot inside moves to a cell as shallow as its own, so a hole behind a
     stalled robot stayed open for good, and robots outside came to it and waited
