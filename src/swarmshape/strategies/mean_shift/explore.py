@@ -76,7 +76,7 @@ def mean_shift(
     relative = offsets[None] - base[:, None, :]
     free = around.contains(offsets[None]) & ~taken & relative.any(axis=2)
     rows = np.flatnonzero(outside)
-    reach = walkable(view, rows, base[rows], offsets)
+    reach = walkable(view.taken[rows], base[rows], offsets)
     free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
     weight = np.where(free, window.weights(relative), 0.0)
     total = weight.sum(axis=1)
@@ -86,14 +86,14 @@ def mean_shift(
     return shift, free
 
 
-def walkable(view: View, robots: np.ndarray, base: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """The cells of each robot's view square it can walk to from its base through free cells
-    it senses (its window's `offsets`), four ways ``(k, side, side)``."""
-    r = view.reach
-    start = np.zeros((len(robots), *view.taken.shape[1:]), dtype=bool)
-    start[np.arange(len(robots)), base[:, 0] + r, base[:, 1] + r] = True
-    free = ~view.taken[robots] & sensed(offsets, r)
-    return paths(~free, start)[0] >= 0
+def walkable(walls: np.ndarray, base: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """The cells of each robot's view square ``(k, side, side)`` it can walk to from its base
+    round `walls` (its view square) through cells it senses (its window's `offsets`), four
+    ways."""
+    r = walls.shape[1] // 2
+    start = np.zeros_like(walls)
+    start[np.arange(len(walls)), base[:, 0] + r, base[:, 1] + r] = True
+    return paths(walls | ~sensed(offsets, r), start)[0] >= 0
 
 
 def sensed(offsets: np.ndarray, reach: int) -> np.ndarray:
@@ -194,9 +194,10 @@ def round_the_silent(
     on_shape = around.contains(square(r))[robots[rows]].reshape(-1, side, side)
     held = seeded(view.taken[robots[rows]] & on_shape, frame[rows])
     firm = held | silent[rows]
-    reached = _reached(firm, start[rows], offsets)
+    reached = walkable(firm, start[rows], offsets)[:, offsets[:, 0] + r, offsets[:, 1] + r]
     open_way = (goal[rows] & reached).any(axis=1)
-    walled = ~open_way & (goal[rows] & _reached(held, start[rows], offsets)).any(axis=1)
+    round_held = walkable(held, start[rows], offsets)[:, offsets[:, 0] + r, offsets[:, 1] + r]
+    walled = ~open_way & (goal[rows] & round_held).any(axis=1)
     keep = walled | (memory.rounding[robots[rows]] != 0)
     rows, firm, reached = rows[keep], firm[keep], reached[keep]
     if not len(rows):
@@ -215,16 +216,6 @@ def round_the_silent(
     moves[rounding] = False
     moves[rounding, move[move > 0] - 1] = True
     return moves
-
-
-def _reached(walls: np.ndarray, start: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """``(k, m)``: which cells of the window `offsets` each robot can walk to from its base
-    `start` round `walls` (its view square) through cells it senses."""
-    r = walls.shape[1] // 2
-    origin = np.zeros_like(walls)
-    origin[np.arange(len(walls)), start[:, 0] + r, start[:, 1] + r] = True
-    steps = paths(walls | ~sensed(offsets, r), origin)[0]
-    return steps[:, offsets[:, 0] + r, offsets[:, 1] + r] >= 0
 
 
 def go_round(
