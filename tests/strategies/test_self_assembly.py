@@ -20,7 +20,7 @@ from swarmshape.errors import InputError
 from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import create
-from swarmshape.strategies.self_assembly import JOINED, WAIT, SelfAssembly
+from swarmshape.strategies.self_assembly import JOINED, WAIT, WANDER, SelfAssembly
 from tests.conftest import SHAPES, grid_from
 
 
@@ -97,6 +97,27 @@ def test_the_packed_start_is_a_block_against_the_seeds():
     assert touching.any()
     low, high = swarm.cell.min(axis=0), swarm.cell.max(axis=0)
     assert (high - low + 1).prod() == len(swarm.cell)  # 64 robots: an 8x8 block
+
+
+def test_robots_that_hear_nothing_of_the_structure_walk_straight_on_to_find_it():
+    """Scattered robots used to step at random, and spent most of a run searching: a random
+    step repeats the last with a chance of a third at most, so its straight runs average under
+    1.5 cells. Wanderers now walk straight on until blocked or they turn (`localise.roam`)."""
+    swarm = build(configure(SHAPES / "small-square.png", strategy="self-assembly", seed=1))
+    memory = swarm.driver.memory
+    runs, length, last = [], np.zeros(len(swarm.cell), dtype=int), np.zeros_like(swarm.cell)
+    for _ in range(600):
+        before, wandering = swarm.cell.copy(), memory.state == WANDER
+        swarm.step()
+        step = swarm.cell - before
+        for robot in np.flatnonzero(wandering & step.any(axis=1)):
+            if (step[robot] == last[robot]).all():
+                length[robot] += 1
+            else:
+                runs += [length[robot]] if length[robot] else []
+                length[robot], last[robot] = 1, step[robot]
+    assert len(runs) > 50
+    assert np.mean(runs) > 3.0
 
 
 def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_path):

@@ -3,7 +3,9 @@
 doi:10.1126/science.1254295), ported to the cell lattice.
 
 Every robot runs the same program with the paper's states (plus `wander`, for robots that start
-alone, and `stopped`, for one that walked round everything without finding a place):
+alone, and `stopped`, for one that walked round everything without finding a place). Robots in
+the paper start packed against the seeds; a wanderer, scattered away from them, walks straight
+on until it hears the structure (`localise.roam`), then heads for it.
 
 - **gradient**: a stationary robot's value is one more than the least value among its 4-adjacent
   stationary neighbours (seeds hold 0), spread by messages one hop per step;
@@ -39,6 +41,7 @@ from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register
+from swarmshape.strategies.skills.localise import roam
 from swarmshape.strategies.skills.view import SILENCE, paths
 
 START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
@@ -122,6 +125,12 @@ class SelfAssembly(Program):
             "find one",
             at_least=0,
         )
+        roam: int = option(
+            20,
+            "cells a robot that has not found the structure walks straight on average before "
+            "it turns at random (it turns at a wall too)",
+            at_least=1,
+        )
 
     memory: ClassVar[dict[str, Slot]] = {
         "state": Slot(np.int64, START),
@@ -136,6 +145,7 @@ class SelfAssembly(Program):
         "want": Slot(np.int64, 0),
         "known": Slot(np.int64, -1, 25),
         "unheard": Slot(np.int64, 0, 25, added=True),
+        "roam": Slot(np.int64, 0, added=True),
     }
 
     def act(
@@ -160,9 +170,10 @@ class SelfAssembly(Program):
             _leave(view, mine, self.options)
             _follow(view, _Where(sense, rows), mine, moved_rows)
             _arrive(view, mine, moved_rows)
-            _wander(view, mine, moved_rows, rng)
+            _home_in(view, mine, moved_rows, rng)
             mine.write_back()
             moves[rows] = moved_rows
+            moves += _roam(sense, memory, view, rows, moved_rows, self.options.roam, rng)
         messages = MESSAGE.pack(
             state=memory.state + 1,
             gradient=memory.gradient,
@@ -542,14 +553,14 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
 
 
-def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
-    """Robots that have not found the structure step at random to a free cell, half the
-    time."""
+def _home_in(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
+    """Wanderers at rest that hear the structure step toward it, at random but mostly along
+    each axis it is off by."""
     walking = (memory.state == WANDER) & view.ready & (moves == 0)
     noise = rng.random((len(moves), 5))
     noise[:, 0] = 0.0
-    # a wanderer that hears the structure walks toward it: along each axis it is off by
     bx, by = view.beacon[:, 0], view.beacon[:, 1]
+    walking &= (bx != 0) | (by != 0)
     noise[:, 1] += 2.0 * (bx > 0) + (np.abs(bx) >= np.abs(by)) * (bx > 0)
     noise[:, 2] += 2.0 * (bx < 0) + (np.abs(bx) >= np.abs(by)) * (bx < 0)
     noise[:, 3] += 2.0 * (by > 0) + (np.abs(by) > np.abs(bx)) * (by > 0)
@@ -559,3 +570,27 @@ def _wander(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Gener
     choice = noise.argmax(axis=1)
     walking &= noise.max(axis=1) > 0.5
     moves[walking] = choice[walking]
+
+
+def _roam(
+    sense: Perception,
+    memory: Memory,
+    view: _View,
+    rows: np.ndarray,
+    moves: np.ndarray,
+    turn_every: int,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Moves of the wanderers of `rows` (with `moves` so far) that hear nothing of the
+    structure: `localise.roam`, straight on at speed. They used to step at random, and a
+    random walk needs the arena's area squared to find the structure: robots scattered over
+    the arena spent most of a run searching."""
+    lost = np.zeros(len(sense), dtype=bool)
+    lost[rows] = (memory.state[rows] == WANDER) & ~view.beacon.any(axis=1) & (moves == 0)
+    index = np.zeros(len(sense), dtype=np.int64)
+    index[rows] = np.arange(len(rows))
+
+    def taken(robots: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        return view.taken[index[robots], _slot(cells)]
+
+    return roam(sense, memory.roam, lost, taken, turn_every, rng)

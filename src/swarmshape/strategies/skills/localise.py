@@ -15,6 +15,7 @@ or starting, 0 if it stays), ``progress`` (in 1/`FIXED` cells), ``stays`` and ``
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from types import SimpleNamespace
 
 import numpy as np
@@ -158,38 +159,51 @@ def find_the_others(
 ) -> np.ndarray:
     """Moves of the robots that do not know where they are: toward the nearest seed or
     localised neighbour, stopping beside it to take their bearings; with none in sight,
-    straight on across the arena at speed, turning at random about every `turn_every` steps
-    and wherever blocked (a straight walk crosses an arena in its width, a random one needs
-    its area squared). Robots that do not know where they are tell each other nothing: a
-    count of hops passed among them would only count up for ever where no localised robot
-    is."""
+    `roam`. Robots that do not know where they are tell each other nothing: a count of hops
+    passed among them would only count up for ever where no localised robot is."""
     kin = sense.heard & sense.kin
     known = kin & (sense.seed | (said.localised == 1))
-    lost = ~memory.localised & sense.ready
-    moves = np.zeros(len(sense), dtype=np.int64)
     best = known_to(sense, known)
-    toward = np.flatnonzero(lost & (best >= 0))
+    lost = ~memory.localised & (best < 0)
+    moves = roam(sense, memory.roam, lost, lambda robots, cells: view.at(robots, cells)[0],
+                 turn_every, rng)  # fmt: skip
+    toward = np.flatnonzero(~memory.localised & sense.ready & (best >= 0))
     offset = sense.offset[best[toward]]
     far = np.abs(offset).max(axis=1) >= 1.5  # not yet beside it: go on
     along_x = np.abs(offset[:, 0]) >= np.abs(offset[:, 1])
     way = np.where(along_x, np.where(offset[:, 0] > 0, 1, 2), np.where(offset[:, 1] > 0, 3, 4))
     moves[toward[far]] = way[far]
-    roaming = np.flatnonzero(lost & (best < 0))
-    way = memory.roam[roaming]
+    return moves
+
+
+def roam(
+    sense: Perception,
+    way: np.ndarray,
+    lost: np.ndarray,
+    taken: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    turn_every: int,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Moves of the `lost` robots (a mask: robots with nothing in sight to head for):
+    straight on across the arena at speed, turning at random about every `turn_every` steps
+    and wherever blocked (a straight walk crosses an arena in its width, a random one needs
+    its area squared). `way` is their memory of the way they go (0: none yet);
+    ``taken(robots, offsets)`` says whether each of `robots` senses something there."""
+    moves = np.zeros(len(sense), dtype=np.int64)
+    roaming = np.flatnonzero(lost & sense.ready)
+    ways = way[roaming]
     failed = (sense.moved[roaming] == 0).all(axis=1)  # a wall (or a cell taken first)
-    blocked = view.at(roaming, STEPS[way])[0] | (way == 0) | failed
+    blocked = taken(roaming, STEPS[ways]) | (ways == 0) | failed
     fresh = rng.integers(1, len(STEPS) - 1, len(roaming))  # any way but the one that failed
-    way = np.where(blocked, np.where(fresh >= way, fresh + 1, fresh), way)
-    memory.roam[roaming] = way
-    moves[roaming] = way
+    ways = np.where(blocked, np.where(fresh >= ways, fresh + 1, fresh), ways)
+    way[roaming] = ways
+    moves[roaming] = ways
     # under way, straight on while clear, and now and then a stop, to turn at random after it
-    going = ~memory.localised & sense.cruising & (sense.heading == memory.roam)
-    going &= ~(known_to(sense, known) >= 0)
-    rows = np.flatnonzero(going)
-    clear = ~view.at(rows, 2 * STEPS[sense.heading[rows]])[0]
+    rows = np.flatnonzero(lost & sense.cruising & (sense.heading == way))
+    clear = ~taken(rows, 2 * STEPS[sense.heading[rows]])
     keep = clear & (rng.random(len(rows)) >= 1 / turn_every)
     moves[rows[keep]] = sense.heading[rows[keep]]
-    memory.roam[rows[~keep]] = 0
+    way[rows[~keep]] = 0
     return moves
 
 
