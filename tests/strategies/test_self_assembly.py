@@ -120,6 +120,18 @@ def test_robots_that_hear_nothing_of_the_structure_walk_straight_on_to_find_it()
     assert np.mean(runs) > 3.0
 
 
+def test_a_robot_inside_the_shape_never_steps_out_of_it_to_pass_a_follower():
+    """Found re-running the comparison sweep: a robot inside the shape, stepping past a
+    follower that faced it, turned from the wall and out of the shape, and joined there (its
+    next move left the shape), so a cell stayed open for good. The move it judges is the one
+    it makes."""
+    swarm = formed("star.png", cells=10, seed=16)
+    targets = {tuple(cell) for cell in swarm.world.targets.tolist()}
+    joined = swarm.driver.memory.state == JOINED
+    assert all(tuple(cell) in targets for cell in swarm.cell[joined].tolist())
+    assert swarm.complete
+
+
 def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_path):
     with pytest.raises(
         InputError, match="start must be packed, scatter or a CSV file of start cells, got 'pakced'"

@@ -499,8 +499,10 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     mine = np.where(least >= INFINITE, INFINITE, least + 1)
     layer_end = (view.joined[:, four] & (view.gradient[:, four] >= mine[:, None])).any(axis=1)
     layer_end &= mine < INFINITE
-    next_cell = cell + STEPS[choice]
-    leaves = ~sense.blueprint.contains(sense.group, next_cell) | (choice == 0)
+    # the next move is the way it would go: stepping past a follower that faces it, an inside
+    # robot may turn from the wall, and out of the shape
+    leaves = (choice == 0) | ~sense.blueprint.contains(sense.group, cell + STEPS[choice])
+    leaves |= ~sense.blueprint.contains(sense.group, cell + STEPS[way])
     # never seal a pocket of the shape: step into it instead (see `_pocket`)
     stopping = np.flatnonzero(inside & (layer_end | leaves))
     sealed = np.zeros(len(choice), dtype=np.int64)
