@@ -132,6 +132,16 @@ def test_a_robot_inside_the_shape_never_steps_out_of_it_to_pass_a_follower():
     assert swarm.complete
 
 
+def test_a_wanderer_the_structure_grew_round_joins_where_it_stands():
+    """Scattered starts put robots on the shape's cells. Found re-running the paper's Fig. 4
+    sweep: the structure grew round such a robot, every cell beside it taken, so it never
+    started round the structure, and the followers behind it waited for it for good (the K at
+    14 cells, seed 4: 59 % at step 8,000). It now starts too, and on the shape joins there."""
+    swarm = formed("letter-k.png", cells=14, seed=4)
+    assert swarm.complete
+    assert swarm.overlap_total == 0
+
+
 def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_path):
     with pytest.raises(
         InputError, match="start must be packed, scatter or a CSV file of start cells, got 'pakced'"

@@ -527,12 +527,15 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
 
 
 def _arrive(view: _View, memory: Memory, moves: np.ndarray) -> None:
-    """Wanderers at rest beside the structure start round it, with it on their right."""
+    """Wanderers at rest beside the structure start round it, with it on their right. One
+    that the structure grew round, with no cell free beside it, starts too: on a cell of the
+    shape it then joins where it stands (`_follow`); left a wanderer, it stood in the
+    followers' way for good (scattered starts put robots on the shape's cells)."""
     state = memory.state
     found = (state == WANDER) & view.ready & ~view.unknown[:, NEAR8].any(axis=1)
     found &= (view.stationary[:, NEAR8] & (view.gradient[:, NEAR8] < INFINITE)).any(axis=1)
     heading = _first_heading(view, found)
-    found &= heading > 0
+    found &= (heading > 0) | view.taken[:, AHEAD[1:]].all(axis=1)
     state[found] = OUTSIDE
     memory.heading[found] = heading[found]
     memory.travelled[found] = 0
