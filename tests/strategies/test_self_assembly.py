@@ -142,6 +142,16 @@ def test_a_wanderer_the_structure_grew_round_joins_where_it_stands():
     assert swarm.overlap_total == 0
 
 
+def test_a_robot_never_stops_where_the_free_cells_beside_it_may_part():
+    """Robots arriving round the structure from everywhere at once closed pockets longer than
+    a robot's window sees whole (the S at 18 cells, seed 7: three cells walled in, 98.9 % for
+    good). A robot about to stop where the free cells beside it lie apart within its window
+    goes on into the shape instead."""
+    swarm = formed("letter-s.png", cells=18, seed=7)
+    assert swarm.complete
+    assert swarm.overlap_total == 0
+
+
 def test_an_unknown_start_word_is_refused_and_a_csv_may_be_named_by_text(tmp_path):
     with pytest.raises(
         InputError, match="start must be packed, scatter or a CSV file of start cells, got 'pakced'"

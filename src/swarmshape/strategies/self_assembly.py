@@ -39,7 +39,7 @@ import numpy as np
 from swarmshape.core.local import Memory, Program, Schema, Slot
 from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.options import option
-from swarmshape.core.perception import Perception
+from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.strategies import register
 from swarmshape.strategies.skills.localise import roam
 from swarmshape.strategies.skills.view import SILENCE, paths
@@ -511,8 +511,12 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
         pocket = _pocket(view.stationary[stopping], d)
         pocket &= sense.blueprint.contains(sense.group[stopping], beside)
         sealed[stopping[(sealed[stopping] == 0) & pocket]] = d
-    join = inside & (layer_end | leaves) & (sealed == 0)
-    way = np.where(sealed > 0, sealed, way)
+    # nor stop where the free cells beside it may part (see `_parts`): on into the shape
+    onward = np.zeros(len(choice), dtype=np.int64)
+    on = stopping[sealed[stopping] == 0]
+    onward[on] = _onward(view.stationary[on], way[on], cell[on], sense.group[on], sense.blueprint)
+    join = inside & (layer_end | leaves) & (sealed == 0) & (onward == 0)
+    way = np.where(sealed > 0, sealed, np.where(onward > 0, onward, way))
     state[join] = JOINED
     memory.gradient[join] = mine[join]
     blocked = view.taken[rows, AHEAD[way]]
@@ -556,6 +560,41 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
     start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
     reach = paths(~free, start & free)[0] >= 0
     return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
+
+
+def _onward(
+    stationary: np.ndarray,
+    way: np.ndarray,
+    cell: np.ndarray,
+    group: np.ndarray,
+    blueprint: Blueprint,
+) -> np.ndarray:
+    """For robots about to stop inside the shape where free cells beside one, in parts that
+    run on out of its 5x5 window (`stationary`, ``(a, 25)``), lie apart round its own cell:
+    the way on into the shape instead (its `way` if that stays in the shape, else the first
+    free cell of the shape beside it); 0 for the others. Stopped there, it might part free
+    cells of the shape from the robots that would fill them: `_pocket` sees a pocket only
+    whole within the window, and robots arriving round the structure from everywhere at once
+    closed longer ones. (A part whole within the window is a pocket, or a dead end outside
+    the shape that nobody needs.)"""
+    a = len(stationary)
+    free = ~stationary.reshape(a, 5, 5)
+    free[:, 2, 2] = False
+    beside = free.reshape(a, 25)[:, AHEAD[1:]]
+    reach = np.zeros((a, 4, 25), dtype=bool)
+    for d in range(1, 5):
+        start = np.zeros((a, 5, 5), dtype=bool)
+        start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
+        reach[:, d - 1] = (paths(~free, start & free)[0] >= 0).reshape(a, 25)
+    running_on = beside & (reach & BORDER).any(axis=2)
+    first = reach[np.arange(a), np.argmax(running_on, axis=1)][:, AHEAD[1:]]
+    parts = (running_on & ~first).any(axis=1)
+    into = beside & np.stack(
+        [blueprint.contains(group, cell + STEPS[d]) for d in range(1, 5)], axis=1
+    )
+    keeps = (way > 0) & into[np.arange(a), np.maximum(way, 1) - 1]
+    on = np.where(keeps, way, np.where(into.any(axis=1), np.argmax(into, axis=1) + 1, 0))
+    return np.where(parts, on, 0)
 
 
 def _home_in(view: _View, memory: Memory, moves: np.ndarray, rng: np.random.Generator) -> None:
