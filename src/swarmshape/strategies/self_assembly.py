@@ -127,8 +127,8 @@ class SelfAssembly(Program):
         )
         roam: int = option(
             20,
-            "cells a robot that has not found the structure walks straight on average before "
-            "it turns at random (it turns at a wall too)",
+            "a wanderer that hears nothing of the structure turns at random once in this many "
+            "steps under way, on average (and at a wall or a robot in its way)",
             at_least=1,
         )
 
@@ -511,7 +511,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
         pocket = _pocket(view.stationary[stopping], d)
         pocket &= sense.blueprint.contains(sense.group[stopping], beside)
         sealed[stopping[(sealed[stopping] == 0) & pocket]] = d
-    # nor stop where the free cells beside it may part (see `_parts`): on into the shape
+    # nor stop where the free cells beside it may part (see `_onward`): on into the shape
     onward = np.zeros(len(choice), dtype=np.int64)
     on = stopping[sealed[stopping] == 0]
     onward[on] = _onward(view.stationary[on], way[on], cell[on], sense.group[on], sense.blueprint)

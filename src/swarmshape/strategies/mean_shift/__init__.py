@@ -165,8 +165,8 @@ class MeanShift(Program):
         )
         roam: int = option(
             20,
-            "cells a robot that sees nobody localised walks straight on average before it "
-            "turns at random (it turns at a wall too)",
+            "a robot that sees nobody localised turns at random once in this many steps under "
+            "way, on average (and at a wall or a robot in its way)",
             at_least=1,
         )
 

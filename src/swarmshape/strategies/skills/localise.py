@@ -185,10 +185,11 @@ def roam(
     rng: np.random.Generator,
 ) -> np.ndarray:
     """Moves of the `lost` robots (a mask: robots with nothing in sight to head for):
-    straight on across the arena at speed, turning at random about every `turn_every` steps
-    and wherever blocked (a straight walk crosses an arena in its width, a random one needs
-    its area squared). `way` is their memory of the way they go (0: none yet);
-    ``taken(robots, offsets)`` says whether each of `robots` senses something there."""
+    straight on across the arena at speed, turning wherever blocked and at random with chance
+    1/`turn_every` at each step it goes on under way (a cell takes one or two of those): a
+    straight walk crosses an arena in its width, a random one needs its area squared. `way`
+    is their memory of the way they go (0: none yet); ``taken(robots, offsets)`` says whether
+    each of `robots` senses something there."""
     moves = np.zeros(len(sense), dtype=np.int64)
     roaming = np.flatnonzero(lost & sense.ready)
     ways = way[roaming]
