@@ -23,7 +23,8 @@ on until it hears the structure (`localise.roam`), then heads for it.
   robot in its way;
 - **joining**: once its estimate lies in the shape, a robot stops for good when its next move
   would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
-  end of the layer being built).
+  end of the layer being built); on the lattice, not where it would wall free cells of the
+  shape off (`_pocket`, `_onward`: it moves on into them instead).
 
 As in the paper, shapes with holes cannot be formed (the runner warns), and errors in gradient
 and position warp the shape more the farther it grows from the seeds.
@@ -514,7 +515,8 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     # nor stop where the free cells beside it may part (see `_onward`): on into the shape
     onward = np.zeros(len(choice), dtype=np.int64)
     on = stopping[sealed[stopping] == 0]
-    onward[on] = _onward(view.stationary[on], way[on], cell[on], sense.group[on], sense.blueprint)
+    barred = view.facing[on] | view.foreign[on]
+    onward[on] = _onward(walls[on], barred, way[on], cell[on], sense.group[on], sense.blueprint)
     join = inside & (layer_end | leaves) & (sealed == 0) & (onward == 0)
     way = np.where(sealed > 0, sealed, np.where(onward > 0, onward, way))
     state[join] = JOINED
@@ -532,9 +534,10 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
 
 def _arrive(view: _View, memory: Memory, moves: np.ndarray) -> None:
     """Wanderers at rest beside the structure start round it, with it on their right. One
-    that the structure grew round, with no cell free beside it, starts too: on a cell of the
-    shape it then joins where it stands (`_follow`); left a wanderer, it stood in the
-    followers' way for good (scattered starts put robots on the shape's cells)."""
+    with no cell free beside it (the structure grew round it, with robots in the last gaps)
+    starts too: on a cell of the shape it then joins where it stands (`_follow`); left a
+    wanderer, it stood in the followers' way for good (scattered starts put robots on the
+    shape's cells)."""
     state = memory.state
     found = (state == WANDER) & view.ready & ~view.unknown[:, NEAR8].any(axis=1)
     found &= (view.stationary[:, NEAR8] & (view.gradient[:, NEAR8] < INFINITE)).any(axis=1)
@@ -563,22 +566,26 @@ def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
 
 
 def _onward(
-    stationary: np.ndarray,
+    walls: np.ndarray,
+    barred: np.ndarray,
     way: np.ndarray,
     cell: np.ndarray,
     group: np.ndarray,
     blueprint: Blueprint,
 ) -> np.ndarray:
     """For robots about to stop inside the shape where free cells beside one, in parts that
-    run on out of its 5x5 window (`stationary`, ``(a, 25)``), lie apart round its own cell:
-    the way on into the shape instead (its `way` if that stays in the shape, else the first
-    free cell of the shape beside it); 0 for the others. Stopped there, it might part free
-    cells of the shape from the robots that would fill them: `_pocket` sees a pocket only
-    whole within the window, and robots arriving round the structure from everywhere at once
-    closed longer ones. (A part whole within the window is a pocket, or a dead end outside
-    the shape that nobody needs.)"""
-    a = len(stationary)
-    free = ~stationary.reshape(a, 5, 5)
+    run on out of its 5x5 window (`walls`: the structure and stalled robots, ``(a, 25)``),
+    lie apart round its own cell: the way on into the shape instead (its `way` if that stays
+    in the shape, else the first cell of the shape beside it that is neither walled nor
+    `barred`, a follower facing it or another group's robot); 0 for the others. Stopped
+    there, it might part free cells of the shape from the robots that would fill them:
+    `_pocket` sees a pocket only whole within the window, and robots arriving round the
+    structure from everywhere at once closed longer ones. (A part whole within the window is
+    a pocket, or a dead end outside the shape that nobody needs.)"""
+    a = len(walls)
+    if not a:  # most steps: nobody about to stop
+        return np.zeros(0, dtype=np.int64)
+    free = ~walls.reshape(a, 5, 5)
     free[:, 2, 2] = False
     beside = free.reshape(a, 25)[:, AHEAD[1:]]
     reach = np.zeros((a, 4, 25), dtype=bool)
@@ -589,9 +596,8 @@ def _onward(
     running_on = beside & (reach & BORDER).any(axis=2)
     first = reach[np.arange(a), np.argmax(running_on, axis=1)][:, AHEAD[1:]]
     parts = (running_on & ~first).any(axis=1)
-    into = beside & np.stack(
-        [blueprint.contains(group, cell + STEPS[d]) for d in range(1, 5)], axis=1
-    )
+    into = beside & ~barred[:, AHEAD[1:]]
+    into &= np.stack([blueprint.contains(group, cell + STEPS[d]) for d in range(1, 5)], axis=1)
     keeps = (way > 0) & into[np.arange(a), np.maximum(way, 1) - 1]
     on = np.where(keeps, way, np.where(into.any(axis=1), np.argmax(into, axis=1) + 1, 0))
     return np.where(parts, on, 0)
@@ -635,6 +641,9 @@ def _roam(
     index[rows] = np.arange(len(rows))
 
     def taken(robots: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        # the window is measured from where the robot is now: past half a cell under way, the
+        # cell two ahead of its own is one further on (a claim refused at worst, never an
+        # overlap; looking it up from where it is changed the runs, left for now)
         return view.taken[index[robots], _slot(cells)]
 
     return roam(sense, memory.roam, lost, taken, turn_every, rng)
