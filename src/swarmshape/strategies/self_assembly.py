@@ -24,7 +24,7 @@ on until it hears the structure (`localise.roam`), then heads for it.
 - **joining**: once its estimate lies in the shape, a robot stops for good when its next move
   would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
   end of the layer being built); on the lattice, not where it would wall free cells of the
-  shape off (`_pocket`, `_onward`: it moves on into them instead).
+  shape off (`_pockets`, `_onward`: it moves on into them instead).
 
 As in the paper, shapes with holes cannot be formed (the runner warns), and errors in gradient
 and position warp the shape more the farther it grows from the seeds.
@@ -504,13 +504,13 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     # robot may turn from the wall, and out of the shape
     leaves = (choice == 0) | ~sense.blueprint.contains(sense.group, cell + STEPS[choice])
     leaves |= ~sense.blueprint.contains(sense.group, cell + STEPS[way])
-    # never seal a pocket of the shape: step into it instead (see `_pocket`)
+    # never seal a pocket of the shape: step into it instead (see `_pockets`)
     stopping = np.flatnonzero(inside & (layer_end | leaves))
     sealed = np.zeros(len(choice), dtype=np.int64)
+    pockets = _pockets(view.stationary[stopping])
     for d in range(1, 5):
         beside = cell[stopping] + STEPS[d]
-        pocket = _pocket(view.stationary[stopping], d)
-        pocket &= sense.blueprint.contains(sense.group[stopping], beside)
+        pocket = pockets[:, d - 1] & sense.blueprint.contains(sense.group[stopping], beside)
         sealed[stopping[(sealed[stopping] == 0) & pocket]] = d
     # nor stop where the free cells beside it may part (see `_onward`): on into the shape
     onward = np.zeros(len(choice), dtype=np.int64)
@@ -549,20 +549,31 @@ def _arrive(view: _View, memory: Memory, moves: np.ndarray) -> None:
     moves[found] = heading[found]
 
 
-def _pocket(stationary: np.ndarray, d: int) -> np.ndarray:
-    """Whether the free cells one step in direction `d` form a pocket that the built
-    structure and the robot itself wall in, within its 5x5 window (`stationary`, ``(a, 25)``):
-    if the robot stopped here, no robot could ever reach them (a lattice's dead ends, which
-    the paper's round robots on a continuous floor do not meet)."""
-    a = len(stationary)
-    if not a:  # most steps: no robot to check
-        return np.zeros(0, dtype=bool)
-    free = ~stationary.reshape(a, 5, 5)
+def _reach_beside(walls: np.ndarray) -> np.ndarray:
+    """Per robot and direction d (1 to 4), the slots of its 5x5 window (`walls`, ``(a, 25)``)
+    it could reach from the free cell beside it in direction d without passing its own cell
+    or a wall ``(a, 4, 25)``; none where that cell is walled."""
+    a = len(walls)
+    free = ~walls.reshape(a, 5, 5)
     free[:, 2, 2] = False
-    start = np.zeros((a, 5, 5), dtype=bool)
-    start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
-    reach = paths(~free, start & free)[0] >= 0
-    return reach.any(axis=(1, 2)) & ~(reach.reshape(a, 25) & BORDER).any(axis=1)
+    reach = np.zeros((a, 4, 25), dtype=bool)
+    if not a:  # most steps: no robot to check
+        return reach
+    for d in range(1, 5):
+        start = np.zeros((a, 5, 5), dtype=bool)
+        start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
+        reach[:, d - 1] = (paths(~free, start & free)[0] >= 0).reshape(a, 25)
+    return reach
+
+
+def _pockets(stationary: np.ndarray) -> np.ndarray:
+    """Per robot and direction d (1 to 4, ``(a, 4)``), whether the free cells one step in
+    direction d form a pocket that the built structure and the robot itself wall in, within
+    its 5x5 window (`stationary`, ``(a, 25)``): if the robot stopped here, no robot could ever
+    reach them (a lattice's dead ends, which the paper's round robots on a continuous floor do
+    not meet)."""
+    reach = _reach_beside(stationary)
+    return reach.any(axis=2) & ~(reach & BORDER).any(axis=2)
 
 
 def _onward(
@@ -579,20 +590,14 @@ def _onward(
     in the shape, else the first cell of the shape beside it that is neither walled nor
     `barred`, a follower facing it or another group's robot); 0 for the others. Stopped
     there, it might part free cells of the shape from the robots that would fill them:
-    `_pocket` sees a pocket only whole within the window, and robots arriving round the
+    `_pockets` sees a pocket only whole within the window, and robots arriving round the
     structure from everywhere at once closed longer ones. (A part whole within the window is
     a pocket, or a dead end outside the shape that nobody needs.)"""
     a = len(walls)
     if not a:  # most steps: nobody about to stop
         return np.zeros(0, dtype=np.int64)
-    free = ~walls.reshape(a, 5, 5)
-    free[:, 2, 2] = False
-    beside = free.reshape(a, 25)[:, AHEAD[1:]]
-    reach = np.zeros((a, 4, 25), dtype=bool)
-    for d in range(1, 5):
-        start = np.zeros((a, 5, 5), dtype=bool)
-        start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
-        reach[:, d - 1] = (paths(~free, start & free)[0] >= 0).reshape(a, 25)
+    beside = ~walls[:, AHEAD[1:]]
+    reach = _reach_beside(walls)
     running_on = beside & (reach & BORDER).any(axis=2)
     first = reach[np.arange(a), np.argmax(running_on, axis=1)][:, AHEAD[1:]]
     parts = (running_on & ~first).any(axis=1)
