@@ -11,7 +11,12 @@ rest to rest under those limits of the bottleneck trip, exact or a proved bound 
 ratios divide by trip length over the top speed, which ignores acceleration and so is a
 lower bound than today's: the new ratios are the stricter of the two.
 
-`--quick` runs the 1,000-robot rows and the fixed-cost rows only (about 15 s);
+Beside the formations: the same 1,000-robot block stepped by a plain pygame sprite loop and a
+Mesa 3 model (`scripts/reference_loops.py`, from the shell; Mesa only when installed, the
+`bench` extra), a local program's step at 10,000 robots, and the learning environment's
+batched step (`scripts/bench_env.py`), each with issue 32's figure from before its work.
+
+`--quick` runs the 1,000-robot rows and the fixed-cost rows only (about 20 s);
 `--million` adds a 1,000,000-robot disc run from the shell under a time cap (`--cap`);
 `--caps` runs only the inputs at the caps (issue 29): shapes fitted to few robots, the largest
 arena, the largest pictures, a million start cells and a state that unpacks to 3 GB, each from
@@ -22,6 +27,7 @@ Targets live here and only here: a benchmark, not a timed test.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import io
 import json
 import os
@@ -41,6 +47,7 @@ import numpy.lib.format as npy
 from PIL import Image
 
 from swarmshape.config import RunConfig
+from swarmshape.core.assignment import optimal
 from swarmshape.core.bounds import unit_speed_optimum
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.shape import Shape
@@ -60,6 +67,22 @@ BLOCK_SHELL_SECONDS = 0.6
 DISC_100K_SHELL_SECONDS = 60.0
 STEPPING_TARGETS = {1000: 5000.0, 100_000: 100.0}  # steps/s over the first 20 steps (issue 32)
 MILLION_MOONSHOT = (600.0, 8.0)  # seconds, GB
+REFERENCE_TARGETS = {"sprites": 300.0, "mesa": 100.0}  # times swarmshape's steps/s (issue 32)
+MESA_SHELL_TARGET = 20.0  # Mesa's whole process over swarmshape's, for as many steps
+LOCAL_STEP_MS = 20.0  # a local program's step at 10,000 robots
+LOCAL_PROGRAMS = ("local-swap", "mean-shift", "self-assembly")
+ENV_TARGET = 1500.0  # the learning environment, batched, 1,000 robots, steps/s
+OLD_32 = {  # issue 32's figures, measured before its work
+    "stepping": "1,384 to 1,404 steps/s idle, about 1,000 under load",
+    "sprites": "154x",
+    "mesa": "34x; from the shell Mesa 3 took 4.3x as long",
+    "block shell": "1.2 s idle, 1.8 s under load",
+    "disc shell": "65 s idle, 192 s under load",
+    "local step": "70 to 130 ms",
+    "environment": "534 to 537 steps/s idle, 331 under load",
+}
+"""Issue 32 did not keep its sprite loop and Mesa model: the ones in `scripts/` are new, so
+their ratios do not compare with its figures one for one."""
 CAPS = {  # name: (arguments, seconds, GB): an input at the caps, from the shell
     "fit 2,000 cells across to 5 robots": (["horse.png", "--cells", "2000", "--agents", "5",
                                             "--preview"], 10.0, 0.5),
@@ -203,6 +226,73 @@ def stepping(grid: np.ndarray, steps: int = 20) -> dict:
             swarm.step()
         seconds = time.perf_counter() - started
     return {"robots": int(world.agents), "steps": steps, "steps_per_s": round(steps / seconds, 1)}
+
+
+def side_by_side(folder: Path, ours: dict, shell: dict) -> list[dict]:
+    """The 1,000-robot block stepped by `scripts/reference_loops.py`'s sprite loop and Mesa
+    model, each from the shell: its steps/s over the first steps against swarmshape's (`ours`,
+    the `stepping` row), and its whole process for as many steps as swarmshape's run from the
+    shell (`shell`) took to form, against that run's wall time."""
+    world = world_of(Case("block", 1000).grid())
+    swarm = start_swarm(RunConfig(seed=1), world)
+    goal = np.empty_like(swarm.start_cell)
+    goal[optimal(swarm.start_cell, world.targets, np.random.default_rng(1))] = world.targets
+    scenario = folder / "block.npz"
+    np.savez(scenario, size=np.array(world.size), start=swarm.start_cell, goal=goal)
+    rows = []
+    for loop in ("sprites", "mesa"):
+        if loop == "mesa" and importlib.util.find_spec("mesa") is None:
+            rows.append({"loop": loop, "installed": False})
+            continue
+        first, _ = _reference(loop, scenario, ours["steps"])
+        _, whole = _reference(loop, scenario, shell["steps"])
+        steps_per_s = ours["steps"] / first["seconds"]
+        rows.append(
+            {
+                "loop": loop,
+                "installed": True,
+                "steps_per_s": round(steps_per_s, 1),
+                "times_slower": round(ours["steps_per_s"] / steps_per_s, 1),
+                "shell_steps": shell["steps"],
+                "shell_seconds": round(whole, 2),
+                "times_longer_from_shell": round(whole / shell["seconds"], 1),
+            }
+        )
+    return rows
+
+
+def _reference(loop: str, scenario: Path, steps: int) -> tuple[dict, float]:
+    """One reference loop from the shell: what it printed, and its whole wall time."""
+    script = Path(__file__).resolve().parent / "reference_loops.py"
+    command = [sys.executable, str(script), loop, str(scenario), "--steps", str(steps)]
+    started = time.perf_counter()
+    done = subprocess.run(command, check=True, capture_output=True, text=True)
+    return json.loads(done.stdout), time.perf_counter() - started
+
+
+def local_step(strategy: str, warm: int = 100, steps: int = 20) -> dict:
+    """A local program's whole step (sensing, the program, claims, moving, the audit) at
+    10,000 robots: the 9,946-robot letter S from the default start, seed 1, CPU time per step
+    over `steps` steps after `warm` (a step costs more as robots gather: at steps 1-20 about
+    two thirds of this)."""
+    world = world_of(Case("letter", 10_000).grid())
+    swarm = start_swarm(RunConfig(seed=1, strategy=strategy), world)
+    for _ in range(warm):
+        swarm.step()
+    started = time.process_time()
+    for _ in range(steps):
+        swarm.step()
+    per_step = (time.process_time() - started) / steps
+    return {"strategy": strategy, "robots": int(world.agents), "after": warm,
+            "ms_per_step": round(per_step * 1000, 1)}  # fmt: skip
+
+
+def environment() -> dict:
+    """The learning environment's batched step at 1,000 robots (`scripts/bench_env.py`)."""
+    from bench_env import batched_rate
+
+    wall, cpu = batched_rate()
+    return {"robots": 1000, "steps_per_s": round(wall, 1), "cpu_steps_per_s": round(cpu, 1)}
 
 
 def from_shell(grid: np.ndarray, folder: Path, cap: float | None = None) -> dict:
@@ -356,6 +446,8 @@ def main() -> None:
         folder = Path(scratch)
         results["shell"] = [{"case": "block", **from_shell(Case("block", 1000).grid(), folder)}]
         results["stepping"] = [stepping(Case("block", 1000).grid())]
+        results["side_by_side"] = side_by_side(folder, results["stepping"][0], results["shell"][0])
+        results["environment"] = [environment()]
         cases = [Case("block", 1000)] + [Case(s, n) for n in sizes for s in shapes]
         results["formation"] = []
         for case in cases:
@@ -364,6 +456,7 @@ def main() -> None:
         results["unit_speed"] = [unit_speed(c) for c in (Case("disc", 300), Case("disc", 1000))]
         if not args.quick:
             results["unit_speed"].append(unit_speed(Case("star", 1000)))
+            results["local_step"] = [local_step(strategy) for strategy in LOCAL_PROGRAMS]
             results["stepping"].append(stepping(disc(100_000)))
             big = formation(Case("disc", 100_000))
             results["formation"].append(big)
@@ -414,6 +507,23 @@ def print_table(results: dict) -> None:
             f"  {row['robots']:>9,} robots  {row['steps_per_s']:>8.0f} steps/s"
             f"{_against(row['steps_per_s'], goal, '>=')}"
         )
+    print(f"  before issue 32's work: {OLD_32['stepping']}")
+    print_side_by_side(results["side_by_side"])
+    print("\nlearning environment, batched, 1,000 robots (scripts/bench_env.py, best of 3)")
+    for row in results["environment"]:
+        verdict = _against(row["steps_per_s"], ENV_TARGET, ">=")
+        print(
+            f"  {row['steps_per_s']:>8.0f} steps/s wall{verdict}, {row['cpu_steps_per_s']:.0f}"
+            f" in CPU time; before: {OLD_32['environment']}"
+        )
+    if "local_step" in results:
+        print("\na local program's step at 10,000 robots (letter S, default start), CPU")
+        for row in results["local_step"]:
+            print(
+                f"  {row['strategy']:<14} {row['robots']:,} robots, steps {row['after'] + 1} on:"
+                f" {row['ms_per_step']:>6.1f} ms{_against(row['ms_per_step'], LOCAL_STEP_MS, '<=')}"
+            )
+        print(f"  before issue 32's work: {OLD_32['local step']}")
     print("\nwall time from the shell (swarmshape PNG --headless: the CLI's own world, so its")
     print("start cells, and steps, differ from the in-process row of the same shape)")
     for row in results["shell"]:
@@ -428,11 +538,35 @@ def print_table(results: dict) -> None:
         goal = {1000: BLOCK_SHELL_SECONDS, 100_000: DISC_100K_SHELL_SECONDS}.get(
             round(row["robots"], -3)
         )
+        before = OLD_32.get(f"{row['case']} shell") if row["robots"] <= 100_000 else None
         print(
             f"  {row['case']:<6} {row['robots']:>9,}  {row['seconds']:>7.2f} s"
             f"{_against(row['seconds'], goal, '<=')}  peak {row['peak_gb']:.2f} GB"
             f" ({row['bytes_per_robot']:,} bytes a robot),"
             f" {row['steps']} steps, {row['ratio']:.2f}x ({row['bound_method']})"
+            + (f"; before: {before}" if before else "")
+        )
+
+
+def print_side_by_side(rows: list[dict]) -> None:
+    print("\nthe same block stepped by scripts/reference_loops.py (no planning, whole cells)")
+    for row in rows:
+        name = {"sprites": "pygame sprite loop", "mesa": "Mesa 3 model"}[row["loop"]]
+        if not row["installed"]:
+            print(f"  {name:<18}  not installed: pip install -e '.[bench]'")
+            continue
+        goal = REFERENCE_TARGETS[row["loop"]]
+        print(
+            f"  {name:<18}  {row['steps_per_s']:>8.0f} steps/s: swarmshape is"
+            f" {row['times_slower']:g}x as fast{_against(row['times_slower'], goal, '>=')};"
+            f" before: {OLD_32[row['loop']]}"
+        )
+        verdict = ""
+        if row["loop"] == "mesa":
+            verdict = _against(row["times_longer_from_shell"], MESA_SHELL_TARGET, ">=")
+        print(
+            f"  {'':<18}  from the shell, {row['shell_steps']} steps: {row['shell_seconds']:.2f} s,"
+            f" {row['times_longer_from_shell']:g}x swarmshape's formed run{verdict}"
         )
 
 

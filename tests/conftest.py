@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import sys
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -90,3 +93,13 @@ def make_swarm(
     if getattr(program, "grows_from_seeds", False):
         shape = shape.seeded()
     return Swarm(world_of(shape, agents), program, seed)
+
+
+def script(name: str) -> ModuleType:
+    """A script of scripts/ as a module (they are not a package)."""
+    spec = importlib.util.spec_from_file_location(name, SHAPES.parent / "scripts" / f"{name}.py")
+    assert spec and spec.loader
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # a dataclass looks its module up there
+    spec.loader.exec_module(module)
+    return module

@@ -12,7 +12,6 @@ import json
 import re
 import shlex
 import shutil
-import sys
 from pathlib import Path
 
 import pygame
@@ -24,6 +23,7 @@ from swarmshape.cli import settings_table
 from swarmshape.config import RunConfig, configure
 from swarmshape.experiments.sweep import read_sweep
 from swarmshape.ui.viewer import Viewer
+from tests.conftest import script
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
@@ -359,17 +359,6 @@ def test_the_suite_runs_as_many_examples_a_property_as_the_readme_says():
     assert quick and settings.get_profile("quick").max_examples == int(quick.group(1))
     assert "a thousand examples each" in README
     assert settings.get_profile("slow").max_examples == 1000
-
-
-def script(name: str):
-    """A script of scripts/ as a module (they are not a package)."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module  # a dataclass looks its module up there
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_the_optimal_disc_forms_in_the_steps_of_the_strategies_and_performance_tables():

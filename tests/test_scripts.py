@@ -14,6 +14,7 @@ import numpy as np
 from PIL import Image
 
 from swarmshape.core.shape import Shape
+from tests.conftest import script
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -71,9 +72,23 @@ def test_the_window_pictures_are_made_anew(tmp_path):
             assert len(image.convert("RGB").getcolors(1 << 16)) > 10, "a drawn window"
 
 
+def test_the_sprite_loop_beside_the_benchmark_moves_robots_a_cell_a_step_and_never_onto_one(
+    tmp_path,
+):
+    """`bench.py`'s side-by-side row times it: it must do what it says. One robot goes along x
+    and then y to its goal, another waits behind one standing on the next cell for good."""
+    scenario = tmp_path / "scenario.npz"
+    start = np.array([[0, 0], [0, 4], [1, 4]])
+    goal = np.array([[3, 2], [3, 4], [1, 4]])
+    np.savez(scenario, size=np.array([5, 5]), start=start, goal=goal)
+    loops = script("reference_loops")
+    assert loops.sprites(scenario, 2)[1].tolist() == [[2, 0], [0, 4], [1, 4]]
+    assert loops.sprites(scenario, 10)[1].tolist() == [[3, 2], [0, 4], [1, 4]]
+
+
 def test_the_benchmarks_tables_are_the_ones_its_results_make():
-    for script in ("leaderboard.py", "generalisation.py"):
-        command = [sys.executable, f"scripts/{script}", "--check"]
+    for name in ("leaderboard.py", "generalisation.py"):
+        command = [sys.executable, f"scripts/{name}", "--check"]
         done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, done.stdout + done.stderr
 
