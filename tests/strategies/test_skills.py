@@ -4,6 +4,8 @@ robot's frame cell."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -12,6 +14,7 @@ from scipy import ndimage
 
 from swarmshape.core.perception import Blueprint
 from swarmshape.strategies.skills import shape
+from swarmshape.strategies.skills.localise import roam
 from swarmshape.strategies.skills.view import paths
 from tests.conftest import grid_from
 
@@ -77,3 +80,38 @@ def test_a_cell_beyond_the_square_worked_out_is_refused_not_wrapped_round():
     around = shape.Around(blueprint, np.zeros(2, dtype=np.int64), np.zeros((2, 2), int), 2)
     with pytest.raises(ValueError, match="beyond"):
         around.depth(np.array([[[-3, 0]]]))
+
+
+class AtRest(SimpleNamespace):
+    """Robots at rest whose last step moved them nowhere, as a perception shows them."""
+
+    def __init__(self, robots: int) -> None:
+        super().__init__(
+            ready=np.ones(robots, dtype=bool),
+            moved=np.zeros((robots, 2)),
+            cruising=np.zeros(robots, dtype=bool),
+            heading=np.zeros(robots, dtype=np.int64),
+        )
+
+    def __len__(self) -> int:
+        return len(self.ready)
+
+
+@pytest.mark.parametrize("way", [0, 1, 2, 3, 4])
+def test_a_roaming_robot_sets_out_any_way_but_the_one_that_failed(way):
+    """With no way yet, or after a stop to turn, a roaming robot (`mean-shift`,
+    `self-assembly`) never set out along move 1: the draw skipped the way that failed even
+    when there was none."""
+    robots = 4000
+    moves = roam(
+        AtRest(robots),
+        np.full(robots, way),
+        np.ones(robots, dtype=bool),
+        lambda rows, cells: np.zeros(len(rows), dtype=bool),
+        20,
+        np.random.default_rng(0),
+    )
+    counts = np.bincount(moves, minlength=5)
+    assert counts[0] == 0 and (way == 0 or counts[way] == 0)
+    others = [move for move in range(1, 5) if move != way]
+    assert (counts[others] > robots / (len(others) + 1)).all(), counts

@@ -195,8 +195,10 @@ def roam(
     ways = way[roaming]
     failed = (sense.moved[roaming] == 0).all(axis=1)  # a wall (or a cell taken first)
     blocked = taken(roaming, STEPS[ways]) | (ways == 0) | failed
-    fresh = rng.integers(1, len(STEPS) - 1, len(roaming))  # any way but the one that failed
-    ways = np.where(blocked, np.where(fresh >= ways, fresh + 1, fresh), ways)
+    # any of the four ways with none yet (or after a stop), else any but the one that failed
+    going = ways > 0
+    fresh = rng.integers(1, len(STEPS) - going)
+    ways = np.where(blocked, fresh + (going & (fresh >= ways)), ways)
     way[roaming] = ways
     moves[roaming] = ways
     # under way, straight on while clear, and now and then a stop, to turn at random after it
