@@ -4,17 +4,19 @@ Mesa 3 model, for `bench.py`'s side-by-side rows (issue 32).
     .venv/bin/python scripts/reference_loops.py {sprites,mesa} SCENARIO.npz [--steps 20]
 
 Prints ``{"steps": ..., "seconds": ...}``: the seconds the steps took, set-up excluded (the
-whole process, imports and set-up included, is what `bench.py` times from the shell). Mesa is
-an extra: ``pip install -e '.[bench]'``.
+whole process, imports and set-up included, is what `bench.py` times from the shell: with the
+targets given, not worked out). Mesa is an extra: ``pip install -e '.[bench]'``.
 
 `bench.py` writes the scenario (`SCENARIO.npz`: the arena's `size`, each robot's `start` and
-`goal` cell) from swarmshape's own run of its 1,000-robot block, so the robots, their start
-cells and their targets are the same; this file imports nothing of swarmshape. At each step
+`goal` cell) from its `stepping` row's 1,000-robot block, so the robots, their start cells and
+their targets are that run's; this file imports nothing of swarmshape. At each step
 every robot, in a fresh random order, moves one cell toward its target (along x while it
 differs, then along y) if no robot stands there. That is less than a swarmshape step does (no
 planning, no acceleration, whole cells), and robots may block one another for good: these
 loops measure what a step of the same swarm costs, not how well it forms. Nothing is drawn,
-as in a headless swarmshape run.
+as in a headless swarmshape run. The sprite loop tests each move against every sprite
+(`spritecollideany`), so its step grows as the square of the robots; Mesa's grid looks the
+cell up.
 """
 
 from __future__ import annotations
