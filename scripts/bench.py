@@ -11,7 +11,8 @@ rest to rest under those limits of the bottleneck trip, exact or a proved bound 
 ratios divide by trip length over the top speed, which ignores acceleration and so is a
 lower bound than today's: the new ratios are the stricter of the two.
 
-Beside the formations: the same 1,000-robot block stepped by a plain pygame sprite loop and a
+The formations include the horse at 20,000 cells (issue 32 tried pictures at 9,000 to 23,000
+cells). Beside them: the same 1,000-robot block stepped by a plain pygame sprite loop and a
 Mesa 3 model (`scripts/reference_loops.py`, from the shell; Mesa only when installed, the
 `bench` extra), a local program's step at 10,000 robots, and the learning environment's
 batched step (`scripts/bench_env.py`), each with issue 32's figure from before its work.
@@ -469,6 +470,8 @@ def main() -> None:
         results["side_by_side"] = side_by_side(folder, results["stepping"][0], results["shell"][0])
         results["environment"] = [environment()]
         cases = [Case("block", 1000)] + [Case(s, n) for n in sizes for s in shapes]
+        if not args.quick:  # a picture the size issue 32 tried pictures at, 9,000 to 23,000
+            cases.append(Case("horse", 20_000))
         results["formation"] = []
         for case in cases:
             results["formation"].append(formation(case))
