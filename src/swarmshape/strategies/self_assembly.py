@@ -20,7 +20,8 @@ on until it hears the structure (`localise.roam`), then heads for it.
   (so a lost message rarely lets it go beside a mover), others at once;
 - **edge-following**: a right-hand wall follower around the stationary robots (turn right,
   straight, left, back; the next cell must touch a stationary robot), waiting behind a moving
-  robot in its way;
+  robot in its way; every follower keeps them on its right, so all go round one way (one
+  that stepped back to let another pass turns round again);
 - **joining**: once its estimate lies in the shape, a robot stops for good when its next move
   would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
   end of the layer being built); on the lattice, not where it would wall free cells of the
@@ -89,6 +90,12 @@ RIGHT_SIDE = _slot(STEPS[RIGHT])
 """``[d]``: the window slot of the cell on the right of a robot heading d."""
 FRONT_RIGHT = _slot(STEPS + STEPS[RIGHT])
 """``[d]``: the window slot of the cell ahead and to the right of a robot heading d."""
+HANDS = {
+    name: np.stack([_slot(STEPS[hand] + along) for along in (0 * STEPS, STEPS, STEPS[REVERSE])], 1)
+    for name, hand in (("right", RIGHT), ("left", LEFT))
+}
+"""``[hand][d]``: the window slots of the three cells on that hand of a robot heading d (beside
+it, ahead and behind)."""
 
 
 @register
@@ -482,8 +489,17 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     state[going & (state == OUTSIDE) & in_shape] = INSIDE
     choice = np.zeros(n, dtype=np.int64)
     way = np.zeros(n, dtype=np.int64)  # the same, passing by a follower that faces this one
-    heading = np.where(memory.heading > 0, memory.heading, 1)
+    # one that started boxed in (`_arrive`) has no heading yet: it sets off with the
+    # structure on its right as soon as a cell lets it (east while none does)
+    heading = np.where(memory.heading > 0, memory.heading, _first_heading(view, going))
+    heading[heading == 0] = 1
     walls = view.stationary | view.stalled
+    # one going round the wrong way, the structure on its left and none on its right (it
+    # stepped back to let a follower pass), turns round: followers going opposite ways met
+    # head on along one wall, where neither could step aside, and waited for good
+    right = walls[rows[:, None], HANDS["right"][heading]].any(axis=1)
+    left = walls[rows[:, None], HANDS["left"][heading]].any(axis=1)
+    heading = np.where(going & left & ~right, REVERSE[heading], heading)
     for turn in (RIGHT, np.arange(5), LEFT, REVERSE):
         d = turn[heading]
         target = AHEAD[d]
