@@ -385,7 +385,7 @@ def test_the_shipped_sweeps_hold_the_runs_the_readme_counts():
         assert len(each.values["shape"]) == WORDS[shapes]
         assert len(each.values["strategy"]) == WORDS[strategies]
     noise = sweep("self-assembly-noise")
-    assert "59 of 60 with coverage 1.0" in README and noise.count == 60
+    assert "all 60 with coverage 1.0" in README and noise.count == 60
     assert "ten seeds each" in README and list(noise.seeds) == list(range(10))
     assert "all 60 runs of the same\nten seeds" in README
     assert sweep("self-assembly-noise-1024").count == 60
