@@ -491,7 +491,9 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     way = np.zeros(n, dtype=np.int64)  # the same, passing by a follower that faces this one
     # one that started boxed in (`_arrive`) has no heading yet: it sets off with the
     # structure on its right as soon as a cell lets it (east while none does)
-    heading = np.where(memory.heading > 0, memory.heading, _first_heading(view, going))
+    heading = np.where(
+        memory.heading > 0, memory.heading, _first_heading(view, going & (memory.heading == 0))
+    )
     heading[heading == 0] = 1
     walls = view.stationary | view.stalled
     # one going round the wrong way, the structure on its left and none on its right (it
