@@ -128,7 +128,10 @@ def main() -> None:
     parser.add_argument("scenario", type=Path)
     parser.add_argument("--steps", type=int, default=20)
     args = parser.parse_args()
-    seconds, _ = LOOPS[args.loop](args.scenario, args.steps)
+    try:
+        seconds, _ = LOOPS[args.loop](args.scenario, args.steps)
+    except (OSError, ValueError, KeyError) as bad:  # no file, not an .npz, a field missing
+        parser.exit(2, f"reference_loops.py: error: {args.scenario}: not a scenario ({bad})\n")
     print(json.dumps({"steps": args.steps, "seconds": round(seconds, 4)}))
 
 
