@@ -4,12 +4,11 @@ import contextlib
 import json
 import os
 import subprocess
-import sys
 
 import pytest
 
 from swarmshape.cli import main
-from tests.conftest import SHAPES
+from tests.conftest import SHAPES, python
 
 METRIC_KEYS = {
     "shape", "strategy", "seed", "agents", "targets", "scale", "steps", "coverage", "iou",
@@ -19,9 +18,7 @@ METRIC_KEYS = {
 
 def swarmshape(*args: str) -> subprocess.CompletedProcess:
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    return subprocess.run(
-        [sys.executable, "-m", "swarmshape", *args], capture_output=True, text=True, env=env
-    )
+    return python("-m", "swarmshape", *args, env=env)
 
 
 def test_headless_run_prints_a_summary_and_writes_metrics(tmp_path, capsys):

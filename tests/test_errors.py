@@ -8,7 +8,6 @@ import re
 import shlex
 import struct
 import subprocess
-import sys
 import zlib
 from pathlib import Path
 
@@ -17,7 +16,7 @@ import pytest
 from PIL import Image
 
 from swarmshape.io.checkpoint import VERSION
-from tests.conftest import SHAPES
+from tests.conftest import SHAPES, python
 
 TABLE = Path(__file__).resolve().parent.parent / "docs" / "errors.md"
 ROW = re.compile(
@@ -122,10 +121,7 @@ def swarmshape(folder: Path, command: str) -> subprocess.CompletedProcess:
     if args[0] not in ("sweep", "plot", "edit", "benchmark"):
         args += ["--headless"] + ([] if "--max-steps" in args else ["--max-steps", "3"])
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "PYTHONPATH": str(folder)}
-    return subprocess.run(
-        [sys.executable, "-m", "swarmshape", *args], capture_output=True, text=True, env=env,
-        cwd=folder, timeout=60,
-    )  # fmt: skip
+    return python("-m", "swarmshape", *args, env=env, cwd=folder, timeout=60)
 
 
 def test_the_table_has_every_case():

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from tests.conftest import python
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 PROMISES = {
@@ -48,14 +48,7 @@ def test_every_example_is_listed_here():
 @pytest.mark.parametrize("name", sorted(PROMISES))
 def test_the_example_runs(name, tmp_path):
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
-    result = subprocess.run(
-        [sys.executable, str(EXAMPLES / name), *ARGUMENTS.get(name, [])],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env=env,
-        timeout=120,
-    )
+    result = python(str(EXAMPLES / name), *ARGUMENTS.get(name, []), cwd=tmp_path, env=env)
     assert result.returncode == 0, result.stderr
     for promise in [PROMISES[name], *README_FIGURES.get(name, [])]:
         assert promise in result.stdout

@@ -7,24 +7,22 @@ import json
 import os
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
 from swarmshape.core.shape import Shape
-from tests.conftest import script
+from tests.conftest import python, script
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_the_fault_figures_run_on_a_small_disc(tmp_path):
     out = tmp_path / "faults.json"
-    command = [sys.executable, "scripts/faults.py", "--strategies", "optimal", "--cells", "40"]
-    command += ["--no-pictures", "--out", str(out)]
-    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
-    subprocess.run(command, cwd=ROOT, env=env, check=True, capture_output=True, timeout=300)
+    done = run_script("faults.py", "--strategies", "optimal", "--cells", "40", "--no-pictures",
+                      "--out", str(out))  # fmt: skip
+    assert done.returncode == 0, done.stderr
     figures = json.loads(out.read_text())
     healed, short = figures["optimal"]["with spares"], figures["optimal"]["no spares"]
     assert healed["random"]["final_coverage"] == 1.0 and healed["random"]["overlaps"] == 0
@@ -36,22 +34,24 @@ def test_the_heal_table_runs_and_re_forms_smaller_when_asked(tmp_path):
     """Its default output was None (it crashed at the end of an hour's runs), and it ignored
     `--on-loss`, so under the default keep a loss with no spares was 'healed' at once."""
     out = tmp_path / "heal.json"
-    command = [sys.executable, "scripts/faults.py", "--heal", "--strategies", "optimal"]
-    command += ["--shapes", "square.png", "--random", "0", "--seeds", "2", "--jobs", "1"]
-    command += ["--on-loss", "rescale", "--out", str(out)]
-    env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
-    subprocess.run(command, cwd=ROOT, env=env, check=True, capture_output=True, timeout=300)
+    command = ["--heal", "--strategies", "optimal", "--shapes", "square.png", "--random", "0"]
+    command += ["--seeds", "2", "--jobs", "1", "--on-loss", "rescale", "--out", str(out)]
+    done = run_script("faults.py", *command)
+    assert done.returncode == 0, done.stderr
     runs = json.loads(out.read_text())
     assert len(runs) == 2 and all(run["healed"] for run in runs)
     assert all(run["scale"] < 1 and run["heal_steps"] > 0 for run in runs)
 
 
-def pictures_script(*args: str, timeout: int = 300) -> str:
-    command = [sys.executable, "scripts/make_docs_pictures.py", *args]
+def run_script(name: str, *args: str) -> subprocess.CompletedProcess:
+    """``python scripts/NAME ARGS`` from the repository's root, headless."""
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}
-    done = subprocess.run(
-        command, cwd=ROOT, env=env, check=True, capture_output=True, text=True, timeout=timeout
-    )
+    return python(f"scripts/{name}", *args, cwd=ROOT, env=env, timeout=300)
+
+
+def pictures_script(*args: str) -> str:
+    done = run_script("make_docs_pictures.py", *args)
+    assert done.returncode == 0, done.stderr
     return done.stdout
 
 
@@ -88,14 +88,13 @@ def test_the_sprite_loop_beside_the_benchmark_moves_robots_a_cell_a_step_and_nev
 
 def test_the_benchmarks_tables_are_the_ones_its_results_make():
     for name in ("leaderboard.py", "generalisation.py"):
-        command = [sys.executable, f"scripts/{name}", "--check"]
-        done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
+        done = run_script(name, "--check")
         assert done.returncode == 0, done.stdout + done.stderr
 
 
 def test_the_comparison_table_is_made_from_a_sweeps_rows():
-    command = [sys.executable, "scripts/compare.py", "sweeps/local-vs-optimal.csv"]
-    done = subprocess.run(command, cwd=ROOT, check=True, capture_output=True, text=True)
+    done = run_script("compare.py", "sweeps/local-vs-optimal.csv")
+    assert done.returncode == 0, done.stderr
     rows = {tuple(line.split(" | ")[:3]): line for line in done.stdout.splitlines()}
     small = rows["| letter-s.png", "98", "`optimal`"].split(" | ")
     assert small[3:6] == ["3/3", "51 (50 to 85)", "1.5 (1.5 to 2.6)"]
@@ -108,9 +107,8 @@ def test_the_comparison_table_is_made_from_a_sweeps_rows():
 def test_the_fuzz_of_programs_reports_a_case_that_does_not_form_and_fails():
     """Case 5 of the fuzz (a stall of 19 % of the robots at step 55) stands short of its shape
     at 200 steps: one line names the case and says why, and the exit status is 1."""
-    command = [sys.executable, "scripts/fuzz_programs.py", "mean-shift", "--first", "5"]
-    command += ["--cases", "1", "--max-steps", "200"]
-    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
+    command = ["mean-shift", "--first", "5", "--cases", "1", "--max-steps", "200"]
+    done = run_script("fuzz_programs.py", *command)
     assert done.returncode == 1, done.stderr
     (line, summary) = done.stdout.splitlines()
     assert line.startswith("case 5 (84 cells, 88 robots, noise 0, faults [FaultEvent(step=55")
@@ -127,7 +125,6 @@ def test_the_fuzz_of_a_program_that_grows_from_the_seeds_draws_only_what_it_can_
     grid[rng.integers(height), rng.integers(width)] = True
     whole, solid = Shape(grid).count, Shape(grid).solid().count
     assert solid < whole
-    command = [sys.executable, "scripts/fuzz_programs.py", "self-assembly", "--first", "3"]
-    command += ["--cases", "1", "--max-steps", "1"]
-    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
+    command = ["self-assembly", "--first", "3", "--cases", "1", "--max-steps", "1"]
+    done = run_script("fuzz_programs.py", *command)
     assert done.stdout.startswith(f"case 3 ({solid} cells, "), done.stdout + done.stderr
