@@ -117,7 +117,7 @@ def _step_size(speed: float, room: float, top: float, a: float) -> float:  # pra
 def move(
     cell: np.ndarray, direction: np.ndarray, ahead: np.ndarray, offset: np.ndarray,
     speed: np.ndarray, distance: np.ndarray, pace: np.ndarray, leader: np.ndarray,
-    holder: np.ndarray, queued: np.ndarray, stride: int, top: float, a: float, passes: int,
+    holder: np.ndarray, queued: np.ndarray, stride: int, top: float, a: float,
 ) -> None:  # pragma: no cover (compiled)  # fmt: skip
     """Advance every robot along its reserved run (its arrays, updated in place); a robot
     reaching the next centre gives up the cell behind it (`holder` and `queued` by flat key) to
@@ -128,7 +128,7 @@ def move(
         if ahead[r] > 0:
             room[r] = max(ahead[r] - offset[r], 0.0)
             step[r] = _step_size(speed[r], room[r], top * pace[r], a)
-    follow(cell, direction, offset, speed, pace, leader, room, step, top, a, passes)
+    follow(cell, direction, offset, speed, pace, leader, room, step, top, a)
     for r in range(n):
         offset[r] += step[r]
         speed[r] = step[r]
@@ -153,19 +153,21 @@ def move(
 def follow(
     cell: np.ndarray, direction: np.ndarray, offset: np.ndarray, speed: np.ndarray,
     pace: np.ndarray, leader: np.ndarray, room: np.ndarray, step: np.ndarray, top: float,
-    a: float, passes: int,
+    a: float,
 ) -> None:  # pragma: no cover (compiled)  # fmt: skip
     """Cap followers' steps so that each stays a whole cell behind its leader.
 
     A follower may go as far as its leader's trailing edge after the leader's own step, and
     plans to be able to stop there; a leader only moves on, so that never asks for harder
-    braking. Passes start from standing still and only raise steps, each computed against
-    leaders' steps of the pass before, so every pass is safe, and a train moves as one: up to
-    `passes` of them, each freeing one more link (a longer train moves with a short ripple)."""
+    braking. A follower goes the way its leader goes, so a train is a straight line led by a
+    robot that follows nobody: taken from its head back, each link's step is worked out
+    after its leader's, and a train of any length starts and stops as one, in one pass."""
     followers = np.flatnonzero(leader >= 0)
     lead = np.empty(len(followers))
     first = np.full(len(step), -1)  # per robot, its followers as a linked list through `then`
     then = np.empty(len(followers), dtype=np.int64)
+    order = np.empty(len(followers), dtype=np.int64)  # links, each after its leader's link
+    count = 0
     for k in range(len(followers)):
         f = followers[k]
         ahead_by = 0
@@ -174,27 +176,21 @@ def follow(
         lead[k] = ahead_by + offset[leader[f]] - offset[f] - 1.0
         step[f] = 0.0
         then[k], first[leader[f]] = first[leader[f]], k
-    active, chosen = np.arange(len(followers)), np.empty(len(followers), dtype=np.int64)
-    capped = np.empty(len(followers))
-    for _ in range(passes):
-        for i in range(len(active)):
-            f = followers[active[i]]
-            wall = max(lead[active[i]] + step[leader[f]], 0.0)
-            capped[i] = _step_size(speed[f], min(room[f], wall), top * pace[f], a)
-        # only followers of robots that just went further can go further themselves
-        going = 0
-        for i in range(len(active)):
-            f = followers[active[i]]
-            if capped[i] > step[f]:
-                k = first[f]
-                while k >= 0:
-                    chosen[going] = k
-                    going += 1
-                    k = then[k]
-            step[f] = capped[i]
-        if going == 0:
-            return
-        active = chosen[:going].copy()
+        if leader[leader[f]] < 0:  # first behind the train's head
+            order[count] = k
+            count += 1
+    done = 0
+    while done < count:
+        k = order[done]
+        done += 1
+        f = followers[k]
+        wall = max(lead[k] + step[leader[f]], 0.0)
+        step[f] = _step_size(speed[f], min(room[f], wall), top * pace[f], a)
+        behind = first[f]
+        while behind >= 0:
+            order[count] = behind
+            count += 1
+            behind = then[behind]
 
 
 def positions(

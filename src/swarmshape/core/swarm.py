@@ -36,9 +36,6 @@ if TYPE_CHECKING:
 
 MAX_STEP = 2**62
 """The most steps a run can count (its step numbers go into int64 arrays)."""
-FOLLOW_PASSES = 64
-"""Passes that let a train of robots following each other start and stop as one (each pass
-frees one more link; a longer train moves with a short ripple)."""
 
 ARRAYS = ("cell", "start_cell", "direction", "ahead", "offset", "speed", "distance", "state",
           "filled", "overlaps", "leader", "pace")  # fmt: skip
@@ -518,7 +515,7 @@ class Swarm:
         move(
             self.cell, self.direction, self.ahead, self.offset, self.speed, self.distance,
             self.pace, self.leader, lattice.holder, lattice.queued, lattice.stride,
-            limits.max_speed, limits.max_accel, FOLLOW_PASSES,
+            limits.max_speed, limits.max_accel,
         )  # fmt: skip
 
     def _audit(self) -> None:
