@@ -49,12 +49,15 @@ class Window:
         grid = np.mgrid[-r : r + 1, -r : r + 1].reshape(2, -1).T
         self.offsets = grid[np.hypot(*grid.T) <= radius]
         self.radius = radius
+        # a base is the robot's own cell or one beside it: the kernel from each, worked out once
+        relative = self.offsets[None, None] - np.mgrid[-1:2, -1:2].transpose(1, 2, 0)[:, :, None]
+        z = np.minimum(np.hypot(relative[..., 0], relative[..., 1]) / (radius + 1), 1.0)
+        self._kernels = (1 + np.cos(np.pi * z)) / 2
 
-    def weights(self, relative: np.ndarray) -> np.ndarray:
-        """The kernel at offsets from the base ``(..., 2)``: 1 at the base, 0 one cell past
-        the sensing radius."""
-        z = np.minimum(np.hypot(relative[..., 0], relative[..., 1]) / (self.radius + 1), 1.0)
-        return (1 + np.cos(np.pi * z)) / 2
+    def weights(self, base: np.ndarray) -> np.ndarray:
+        """The kernel over the window's offsets from each robot's base ``(n, 2)``, its own
+        cell or one beside it ``(n, k)``: 1 at the base, 0 one cell past the sensing radius."""
+        return self._kernels[base[:, 0] + 1, base[:, 1] + 1]
 
 
 def mean_shift(
@@ -78,7 +81,7 @@ def mean_shift(
     rows = np.flatnonzero(outside)
     reach = walkable(view.taken[rows], base[rows], offsets)
     free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
-    weight = np.where(free, window.weights(relative), 0.0)
+    weight = np.where(free, window.weights(base), 0.0)
     total = weight.sum(axis=1)
     sees = total > 0
     shift = np.zeros((n, 2))
