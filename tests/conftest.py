@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import select
 import subprocess
 import sys
 import tempfile
@@ -117,43 +118,71 @@ class _CommandServer:
     child for each command line (`tests/command_server.py`); started at the first call."""
 
     process: subprocess.Popen | None = None
+    SLACK = 60
+    """Seconds the server may take beyond a command's timeout (its own start-up, say)."""
 
     @classmethod
-    def run(cls, request: dict, timeout: float) -> int:
+    def run(cls, request: dict, timeout: float) -> int | None:
+        """The command's exit code, or None if it ran past `timeout` (and was killed)."""
         if cls.process is None or cls.process.poll() is not None:
             server = Path(__file__).with_name("command_server.py")
             cls.process = subprocess.Popen(
                 [sys.executable, str(server)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+                text=True,
             )  # fmt: skip
         assert cls.process.stdin and cls.process.stdout
-        cls.process.stdin.write(json.dumps({**request, "timeout": timeout}) + "\n")
-        cls.process.stdin.flush()
-        answer = json.loads(cls.process.stdout.readline() or "null")
-        assert answer is not None, "the command server ended"
-        if answer["timed_out"]:
-            raise subprocess.TimeoutExpired(request["args"], timeout)
-        return answer["code"]
+        try:
+            cls.process.stdin.write(json.dumps({**request, "timeout": timeout}) + "\n")
+            cls.process.stdin.flush()
+            if not select.select([cls.process.stdout], [], [], timeout + cls.SLACK)[0]:
+                raise RuntimeError("the command server does not answer")
+            answer = json.loads(cls.process.stdout.readline() or "null")
+            if answer is None:
+                raise RuntimeError("the command server ended")
+        except BaseException:  # a request half made leaves the server out of step: a new one
+            cls.process.kill()
+            cls.stop()
+            raise
+        return None if answer["timed_out"] else answer["code"]
 
     @classmethod
     def stop(cls) -> None:
         if cls.process is not None:
             cls.process.communicate()  # its input ends, and so does it
+            cls.process = None
+
+
+FRESH_ONLY = {"PYTHONHASHSEED", "PYTHONWARNINGS", "PYTHONIOENCODING", "PYTHONINTMAXSTRDIGITS",
+              "PYTHONUTF8", "PYTHONDEVMODE", "PYTHONSAFEPATH"}  # fmt: skip
+"""Start-up settings of the environment that only a fresh interpreter reads."""
 
 
 def python(
-    *args: str, cwd: Path | str | None = None, env: dict | None = None, timeout: float = 120
+    *args: str,
+    cwd: Path | str | None = None,
+    env: dict | None = None,
+    timeout: float = 120,
+    fresh: bool = False,
 ) -> subprocess.CompletedProcess:
     """What ``subprocess.run([sys.executable, *args], capture_output=True, text=True)`` gives,
     for ``-m MODULE ...`` or ``SCRIPT ...``: a process of its own (its exit code, a crash
     its own), but forked from one that has imported swarmshape already, so the suite's few
-    hundred command lines skip the 0.3 s each that a fresh interpreter takes to start."""
+    hundred command lines skip the 0.3 s each that a fresh interpreter takes to start. A
+    `fresh` interpreter where the test needs one: forked children share one hash seed, so two
+    runs compared for determinism each get their own."""
+    env = dict(os.environ if env is None else env)
+    cwd = os.path.abspath(cwd or os.getcwd())
+    starts_fresh = {name for name in FRESH_ONLY if env.get(name) != os.environ.get(name)}
+    if fresh or starts_fresh or not hasattr(os, "pidfd_open"):
+        command = [sys.executable, *args]
+        return subprocess.run(
+            command, capture_output=True, text=True, cwd=cwd, env=env, timeout=timeout
+        )
     with tempfile.TemporaryDirectory() as folder:
         out, err = Path(folder) / "out", Path(folder) / "err"
-        request = {
-            "args": list(args), "cwd": str(cwd or os.getcwd()), "env": dict(env or os.environ),
-            "out": str(out), "err": str(err),
-        }  # fmt: skip
+        request = {"args": list(args), "cwd": cwd, "env": env, "out": str(out), "err": str(err)}
         code = _CommandServer.run(request, timeout)
         stdout, stderr = out.read_text(errors="replace"), err.read_text(errors="replace")
+    if code is None:
+        raise subprocess.TimeoutExpired([sys.executable, *args], timeout, stdout, stderr)
     return subprocess.CompletedProcess([sys.executable, *args], code, stdout, stderr)

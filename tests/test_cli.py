@@ -16,9 +16,9 @@ METRIC_KEYS = {
 }  # fmt: skip
 
 
-def swarmshape(*args: str) -> subprocess.CompletedProcess:
+def swarmshape(*args: str, fresh: bool = False) -> subprocess.CompletedProcess:
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy"}
-    return python("-m", "swarmshape", *args, env=env)
+    return python("-m", "swarmshape", *args, env=env, fresh=fresh)
 
 
 def test_headless_run_prints_a_summary_and_writes_metrics(tmp_path, capsys):
@@ -39,7 +39,7 @@ def test_same_seed_gives_the_same_metrics_file_byte_for_byte(tmp_path):
     for name in ("a.json", "b.json"):
         path = tmp_path / name
         args = ["run", str(SHAPES / "two-squares.toml"), "--headless", "--seed", "21"]
-        assert swarmshape(*args, "--metrics", str(path)).returncode == 0
+        assert swarmshape(*args, "--metrics", str(path), fresh=True).returncode == 0
         files.append(path.read_bytes())
     assert files[0] == files[1]
 
