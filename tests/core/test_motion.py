@@ -5,7 +5,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmshape.core.audit import overlapping_pairs
-from swarmshape.core.motion import Limits, advance
+from swarmshape.core.motion import STEPS, Limits, advance, move
 
 
 def brute_force_pairs(pos):
@@ -50,3 +50,24 @@ def test_speed_and_acceleration_stay_within_limits_and_agents_stop_on_a_centre()
         assert max(speeds) <= 0.5 + 1e-12
         assert np.all(np.abs(np.diff([0.0, *speeds])) <= 0.125 + 1e-12)
         assert offset[0] == float(run) and speeds[-1] == 0.0
+
+
+def test_a_train_of_any_length_starts_as_one_and_keeps_its_gaps():
+    """200 robots in a row, each following the one ahead east, all at rest with three cells
+    to go: the first step moves every one of them, none nearer the next than touching (64
+    passes used to leave all but the first 64 links standing)."""
+    n = 200
+    east = int(np.flatnonzero((STEPS == (1, 0)).all(axis=1))[0])
+    cell = np.stack([np.arange(n)[::-1] + 1, np.full(n, 1)], axis=1).astype(np.int64)
+    direction, ahead = np.full(n, east), np.full(n, 3)
+    offset, speed, distance, pace = np.zeros(n), np.zeros(n), np.zeros(n), np.ones(n)
+    leader = np.arange(n) - 1  # robot k follows robot k - 1, the head follows nobody
+    stride = 4
+    holder = np.full((n + 6) * stride, -1, dtype=np.int64)
+    queued = holder.copy()
+    for _ in range(3):
+        move(cell, direction, ahead, offset, speed, distance, pace, leader, holder, queued,
+             stride, 0.5, 0.125)  # fmt: skip
+        assert (distance > 0).all()
+        x = cell[:, 0] + offset
+        assert (np.diff(x[::-1]) >= 1.0 - 1e-9).all(), "a whole cell behind the one it follows"

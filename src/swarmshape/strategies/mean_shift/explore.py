@@ -49,14 +49,15 @@ class Window:
         grid = np.mgrid[-r : r + 1, -r : r + 1].reshape(2, -1).T
         self.offsets = grid[np.hypot(*grid.T) <= radius]
         self.radius = radius
-        # a base is the robot's own cell or one beside it: the kernel from each, worked out once
+        # a base is the robot's own cell or one beside it (`base`): the kernel from each of the
+        # nine cells round its own, worked out here, not for every robot
         relative = self.offsets[None, None] - np.mgrid[-1:2, -1:2].transpose(1, 2, 0)[:, :, None]
         z = np.minimum(np.hypot(relative[..., 0], relative[..., 1]) / (radius + 1), 1.0)
         self._kernels = (1 + np.cos(np.pi * z)) / 2
 
     def weights(self, base: np.ndarray) -> np.ndarray:
-        """The kernel over the window's offsets from each robot's base ``(n, 2)``, its own
-        cell or one beside it ``(n, k)``: 1 at the base, 0 one cell past the sensing radius."""
+        """Per robot, the kernel over the window's `offsets` ``(n, k)`` from its `base`
+        ``(n, 2)``: 1 at the base, 0 one cell past the sensing radius."""
         return self._kernels[base[:, 0] + 1, base[:, 1] + 1]
 
 

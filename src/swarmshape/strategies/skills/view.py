@@ -54,11 +54,11 @@ class View:
     def at(self, robots: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each robot senses something on a cell relative to its own, and the entry of
         the neighbour there (-1: none). Cells beyond its window are free as far as it knows."""
-        side = 2 * self.reach + 3
+        bordered = 2 * self.reach + 3  # the side of a square with its border
         at = cells + (self.reach + 1)
-        np.minimum(np.maximum(at, 0, out=at), side - 1, out=at)
+        np.minimum(np.maximum(at, 0, out=at), bordered - 1, out=at)
         # one flat index for both gathers: three index arrays each cost three times as much
-        flat = (robots * side + at[:, 0]) * side + at[:, 1]
+        flat = (robots * bordered + at[:, 0]) * bordered + at[:, 1]
         return self._taken.reshape(-1).take(flat), self._who.reshape(-1).take(flat)
 
 
