@@ -1,6 +1,6 @@
 """Runs command lines for the tests (`tests.conftest.python`), each in a child forked from
 this process, which has imported swarmshape and loaded its compiled kernels once: a fresh
-interpreter would spend 0.3 s on that for each of the suite's few hundred command lines.
+interpreter would spend 0.3 s on that for each of the suite's 150-odd command lines.
 
 Reads one request a line on stdin (JSON: args, cwd, env, out, err, timeout); answers, when the
 child has ended or been killed at the timeout, with its exit code as `subprocess` gives it (-N

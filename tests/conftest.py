@@ -166,8 +166,8 @@ def python(
 ) -> subprocess.CompletedProcess:
     """What ``subprocess.run([sys.executable, *args], capture_output=True, text=True)`` gives,
     for ``-m MODULE ...`` or ``SCRIPT ...``: a process of its own (its exit code, a crash
-    its own), but forked from one that has imported swarmshape already, so the suite's few
-    hundred command lines skip the 0.3 s each that a fresh interpreter takes to start. A
+    its own), but forked from one that has imported swarmshape already, so the suite's
+    150-odd command lines skip the 0.3 s each that a fresh interpreter takes to start. A
     `fresh` interpreter where the test needs one: forked children share one hash seed, so two
     runs compared for determinism each get their own."""
     env = dict(os.environ if env is None else env)
