@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from swarmshape.core.local import QUIET
 from swarmshape.core.shape import Shape
 from tests.conftest import python, script
 
@@ -41,6 +42,38 @@ def test_the_heal_table_runs_and_re_forms_smaller_when_asked(tmp_path):
     runs = json.loads(out.read_text())
     assert len(runs) == 2 and all(run["healed"] for run in runs)
     assert all(run["scale"] < 1 and run["heal_steps"] > 0 for run in runs)
+
+
+STILL = """
+import numpy as np
+from swarmshape import Program
+
+
+class Still(Program):
+    name = "still"
+    description = "knows where it is, and never moves"
+
+    def act(self, sense, memory, rng):
+        return np.zeros(len(sense), dtype=np.int64), np.zeros((len(sense), 0), dtype=np.int64)
+
+    def estimate(self, memory):
+        return np.ones(len(memory), dtype=bool), np.zeros((len(memory), 2), dtype=np.int64)
+"""
+
+
+def test_where_the_steps_go_counts_a_robot_that_never_moves_as_standing_every_step(tmp_path):
+    """16 robots on a 4 by 4 square, none finished, stand until the run comes to rest."""
+    program = tmp_path / "still.py"
+    program.write_text(STILL)
+    done = run_script("where_steps_go.py", "shapes/square.png", "--cells", "4", "--seeds", "1",
+                      "--strategy", f"{program}:Still")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    counts = dict(re.findall(r"^(\w[\w ]*?) +([\d,]+) +[\d.]+%", done.stdout, re.MULTILINE))
+    standing = f"{16 * QUIET:,}"
+    assert counts == {"without bearings": "0", "under way": "0", "starting off": "0",
+                      "standing": standing}  # fmt: skip
+    central = run_script("where_steps_go.py", "shapes/square.png", "--strategy", "optimal")
+    assert central.returncode == 2 and central.stderr.count("\n") == 1, central.stderr
 
 
 def run_script(name: str, *args: str) -> subprocess.CompletedProcess:
