@@ -330,7 +330,7 @@ class _View:
         )
         first = np.flatnonzero(beacon)
         owners, at = np.unique(me[first], return_index=True)
-        toward = np.rint(sense.offset[pick][first[at]]).astype(np.int64)
+        toward = np.rint(np.take(sense.offset, pick[first[at]], axis=0)).astype(np.int64)
         self.beacon = np.zeros((a, 2), dtype=np.int64)
         self.beacon[owners] = toward
 
@@ -360,9 +360,12 @@ class _View:
         mover[(base + slot)[spoke & ~stays]] = True
         self.mover = mover.reshape(a, 25)
         fresh = fresh.reshape(a, 25)
-        known = memory.known[rows]
+        # in place, and rows gathered by `np.take`: at 10,000 robots these few lines were a
+        # fifth of the program's step, each a pass over a copy of every busy robot's window
+        known = np.take(memory.known, rows, axis=0)
         known[moved[rows]] = -1
-        known = np.where(fresh >= 0, fresh, np.where(self.taken & ~self.mover, known, -1))
+        np.copyto(known, -1, where=~self.taken | self.mover)
+        np.copyto(known, fresh, where=fresh >= 0)
         memory.known[rows] = known
         still_there = known >= 0
         self.gradient = np.where(still_there, known >> 1, INFINITE)
@@ -372,10 +375,12 @@ class _View:
         foreign[(base + slot)[~near.kin[keep]]] = True
         self.foreign = foreign.reshape(a, 25)
         unknown = self.taken & ~still_there & ~self.mover & ~self.foreign
-        unheard = memory.unheard[rows]
+        unheard = np.take(memory.unheard, rows, axis=0)
         unheard[moved[rows]] = 0
-        memory.unheard[rows] = np.where(unknown, unheard + 1, 0)
-        self.stalled = memory.unheard[rows] >= SILENCE
+        unheard += 1
+        unheard *= unknown
+        memory.unheard[rows] = unheard
+        self.stalled = unheard >= SILENCE
         self.unknown = unknown & ~self.stalled
         facing = np.zeros(a * 25, dtype=bool)
         facing[(base + slot)[near.facing[keep]]] = True
