@@ -44,6 +44,7 @@ def main() -> int:
         print("where_steps_go.py: error: --share is in (0, 1], --seeds at least 1", file=sys.stderr)
         return 2
     phases: dict[str, Counter[str]] = {"bulk": Counter(), "tail": Counter()}
+    seed = 0
     try:
         for seed in range(args.seeds):
             config = swarmshape.configure(
@@ -59,7 +60,15 @@ def main() -> int:
     except InputError as error:
         print(f"where_steps_go.py: error: {error}", file=sys.stderr)
         return 2
-    print(f"\nrobot-steps of robots not yet finished, seeds 0 to {args.seeds - 1}")
+    except KeyboardInterrupt:  # Ctrl+C: the steps counted so far
+        _table(phases, f"seeds 0 to {seed}, stopped in seed {seed}")
+        return 130
+    _table(phases, f"seeds 0 to {args.seeds - 1}")
+    return 0
+
+
+def _table(phases: dict[str, Counter[str]], runs: str) -> None:
+    print(f"\nrobot-steps of robots not yet finished, {runs}")
     print(f"{'':18}" + "".join(f"{phase:>18}" for phase in phases))
     for kind in KINDS:
         cells = []
@@ -67,7 +76,6 @@ def main() -> int:
             whole = sum(tally.values()) or 1
             cells.append(f"{tally[kind]:>10,} {tally[kind] / whole:6.1%}")
         print(f"{kind:18}" + "".join(f"{cell:>18}" for cell in cells))
-    return 0
 
 
 def count(
