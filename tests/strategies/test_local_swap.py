@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from swarmshape import strategies
 from swarmshape.check import InvariantWatch, watch_run
 from swarmshape.config import configure
+from swarmshape.core.faults import FaultEvent
 from swarmshape.core.local import Memory
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.perception import Blueprint, Perception
@@ -190,5 +191,27 @@ def test_robots_passing_each_other_on_their_way_round_do_not_circle_for_ever():
     other in one loop of four cells, each always the same way as the other."""
     config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=30, seed=0)
     swarm = run(build(config), max_steps=4000)
+    assert swarm.complete
+    assert swarm.overlap_total == 0
+
+
+def test_two_seekers_flipping_between_two_open_cells_in_a_bay_go_on():
+    """The 98-robot S, seed 23, waited for good: two robots without a goal in the S's bay each
+    turned between the two open cells beyond the bay's wall as the other's news came and went,
+    and every new target restarted their count, so they never called the cells to them."""
+    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=14, seed=23)
+    swarm = run(build(config), max_steps=3000)
+    assert swarm.complete
+    assert swarm.overlap_total == 0
+
+
+def test_a_robot_asked_in_turn_by_two_neighbours_trades_with_the_one_in_its_way():
+    """The 286-robot S with a fifth of its robots removed at step 50, seed 2, stopped one cell
+    short for good once robots took their bearings under way, until the robot in the way came
+    first: a robot walled in by robots on their goals answered, in turn, the asks of one three
+    cells off and of the one in its way, and neither ask was ever answered back."""
+    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=24, seed=2,
+                       faults=[FaultEvent(50, "remove", 0.2)])  # fmt: skip
+    swarm = run(build(config), max_steps=3000)
     assert swarm.complete
     assert swarm.overlap_total == 0

@@ -10,6 +10,7 @@ scenario is the same problem to a program. Noise is drawn from the run's one gen
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -63,6 +64,7 @@ class Blueprint:
     """Per group, its shape's frame cells ``(k, 2)`` in row-major order (the same list every
     robot of the group holds)."""
     _numbers: Boxes = field(repr=False)
+    _digests: np.ndarray = field(repr=False)
 
     @classmethod
     def of(cls, frame_cells: list[np.ndarray]) -> Blueprint:
@@ -73,7 +75,13 @@ class Blueprint:
             grid = np.full(high - low, -1, dtype=np.int64)
             grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = np.arange(len(cells))
             boxes.append((low, grid))
-        return cls(tuple(frame_cells), _numbers=Boxes(boxes))
+        digests = [zlib.crc32(np.ascontiguousarray(c, dtype=np.int64).data) for c in frame_cells]
+        return cls(tuple(frame_cells), _numbers=Boxes(boxes), _digests=np.array(digests))
+
+    def digest(self, groups: np.ndarray) -> np.ndarray:
+        """A checksum of each entry's group's shape (CRC-32 of its cells, not negative): a robot
+        that keeps the last one it saw knows when its shape changed."""
+        return self._digests[groups].astype(np.int64)
 
     def count(self, groups: np.ndarray) -> np.ndarray:
         """How many cells the shape of each entry's group has."""
