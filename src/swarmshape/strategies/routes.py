@@ -85,14 +85,14 @@ def ways(
 def _grouped(
     blueprint: Blueprint, groups: np.ndarray, target: np.ndarray
 ) -> Iterator[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """Per group: the group, its robots' rows, its box's low corner and size, the route field
-    of each of their distinct targets, and which field is each robot's."""
+    """Per group: the group, its robots' rows, its box's low corner and size, the route fields
+    (`_Fields`), and which field is each robot's."""
     for group in np.unique(groups).tolist():
         rows = np.flatnonzero(groups == group)
         low, size = _box(blueprint, group)
-        ends, which = np.unique(target[rows], axis=0, return_inverse=True)
-        fields = np.stack([_field(blueprint, group, x, y) for x, y in ends.tolist()])
-        yield group, rows, low, size, fields, which.reshape(-1)
+        pool = _fields(blueprint, group)
+        which = pool.slots(target[rows])
+        yield group, rows, low, size, pool.fields, which
 
 
 def _distance(
@@ -101,7 +101,7 @@ def _distance(
     """Each robot's route cost to its target at cells `at` (inf off the box)."""
     inside = ((at >= 0) & (at < size)).all(axis=1)
     distance = np.full(len(at), np.inf)
-    distance[inside] = fields[which[inside], at[inside, 0], at[inside, 1]]
+    distance[inside] = fields[which[inside], at[inside, 0] * size[1] + at[inside, 1]]
     return distance
 
 
@@ -156,7 +156,54 @@ def _moves(blueprint: Blueprint, group: int) -> tuple[scipy.sparse.csr_matrix, n
     return matrix.tocsr(), cost
 
 
-@functools.lru_cache(maxsize=512)  # a field is 8 bytes a cell: 92 MB at 10,000 robots
+FIELD_BYTES = 1 << 29
+"""Memory the route fields of one shape may keep (512 MB), the least recently used given up
+first. Robots stuck outside a 10,000-robot letter S routed to 1,100 distinct targets a step:
+with room for 512 fields every one was worked out again every step (2.2 s a step)."""
+
+
+class _Fields:
+    """The route fields of one group's shape, one row per target (`_field`), kept while there
+    is room (`FIELD_BYTES`), or while a single step needs them."""
+
+    def __init__(self, blueprint: Blueprint, group: int) -> None:
+        self.blueprint, self.group = blueprint, group
+        self.cells = int(_box(blueprint, group)[1].prod())
+        self.room = max(1, FIELD_BYTES // (8 * self.cells))
+        self.fields = np.empty((0, self.cells))
+        self.slot: dict[tuple[int, int], int] = {}  # in order of last use
+
+    def slots(self, targets: np.ndarray) -> np.ndarray:
+        """Each target's row in `fields`, working out the fields not kept."""
+        ends, which = np.unique(targets, axis=0, return_inverse=True)
+        keys = [(x, y) for x, y in ends.tolist()]
+        needed = set(keys)
+        for key in keys:  # the ones used now last, so they are given up last
+            if key in self.slot:
+                self.slot[key] = self.slot.pop(key)
+        missing = [key for key in keys if key not in self.slot]
+        spare = [
+            self.slot.pop(key)
+            for key in list(self.slot)[: max(0, len(self.slot) + len(missing) - self.room)]
+            if key not in needed
+        ]
+        grow = len(missing) - len(spare)
+        if grow > 0:
+            start = len(self.fields)
+            self.fields = np.concatenate([self.fields, np.empty((grow, self.cells))])
+            spare += range(start, start + grow)
+        for key, row in zip(missing, spare, strict=False):
+            self.fields[row] = _field(self.blueprint, self.group, *key).ravel()
+            self.slot[key] = row
+        return np.array([self.slot[key] for key in keys], dtype=np.int64)[which.reshape(-1)]
+
+
+@functools.lru_cache(maxsize=16)
+def _fields(blueprint: Blueprint, group: int) -> _Fields:
+    """The kept route fields of one group's shape."""
+    return _Fields(blueprint, group)
+
+
 def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
     """The cost of a route to frame cell ``(x, y)`` from each cell of the box, counting the
     step into that cell too, so a route goes to the neighbour of least cost (inf: no route,
