@@ -28,8 +28,8 @@ from swarmshape.strategies.skills.view import SILENCE, paths
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
-    SX, SY, SEEKER_HOPS, LEAVING,
-) = range(20)  # fmt: skip
+    SX, SY, SEEKER_HOPS, LEAVING, KEPT,
+) = range(21)  # fmt: skip
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
 GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
@@ -38,7 +38,7 @@ that nobody sits on or holds, and hops to the robot that sees it (see `_relay_op
 TX, TY: a goal it hears held twice, by a robot at rest on it and one still on its way (see
 `_held_twice`). SX, SY, SEEKER_HOPS: a robot without a goal that calls open cells to it, and
 hops to it (see `_relay_seekers`). LEAVING: it pushes its way out of a pocket of the shape
-(see `_leaving`)."""
+(see `_leaving`). KEPT: it rests on a cell a reshape kept (see `_reshaped`)."""
 
 FAR = 1000
 """HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
@@ -89,8 +89,8 @@ then (the planner sees three cells round it, and in a shape's bays its choices c
 a loop of four cells for ever), and a robot without a goal that the shape walls off from
 its open cell, or sends the long way round, calls open cells to it (`_cut_off`) and may push
 (see `PUSH_HOPS`). A push moves a robot that rests on its goal; walking round costs nobody
-else a step, and robots on cells that a reshape keeps stay where they are unless the shape
-walls a robot off. (A robot that had merely been stuck pushed: a spare jammed beside the
+else a step, and robots on cells that a reshape keeps stay where they are (see
+`_reshaped`). (A robot that had merely been stuck pushed: a spare jammed beside the
 new rows of a reshaped square pushed a robot off a kept cell.) A robot pushed out of its
 cell pushes on at once: waiting, it was pushed back when `TABU` ran
 out, and the two did that for ever at a star's notch."""
@@ -113,6 +113,9 @@ TABU = 10
 its cell (see `PUSH_HOPS`) stands on it until it can move on, and would otherwise take it
 straight back from the one that pushed it, by the distance rule."""
 
+NO_BITMAP = -1
+"""A robot's record of its shape's digest before its first step (see `_reshaped`)."""
+
 BIG = 1 << 40
 """Farther than any cell."""
 
@@ -125,7 +128,7 @@ before it calls open cells to it (see `_cut_off`)."""
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 20
+    message_size = 21
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -147,7 +150,8 @@ class LocalSwap(Program):
         "given": Slot(np.int64, 0, 2),
         "aim": Slot(np.int64, 0, 2),
         "aim_before": Slot(np.int64, 0, 2, added=True),
-        "bitmap": Slot(np.int64, -1, added=True),
+        "bitmap": Slot(np.int64, NO_BITMAP, added=True),
+        "kept": Slot(bool, False, added=True),
         "closest": Slot(np.int64, 0),
         "stuck": Slot(np.int64, 0),
         "heard": Slot(np.int64, 0, 2),
@@ -259,6 +263,7 @@ class LocalSwap(Program):
                 seeker,
                 np.minimum(seeker_hops, FAR),
                 memory.leaving,
+                memory.kept,
             ]
         ).astype(np.int64)
         return moves, messages
@@ -297,13 +302,22 @@ def _reshaped(sense: Perception, memory: Memory) -> None:
     """A robot whose shape changed (`Blueprint.digest`) gives up a goal off the new shape and
     restarts its count and its call (`_cut_off`): they were for the old shape's open cells. A
     spare that had called the last open cell of a square went on calling when the square was
-    reshaped, and robots on the cells the reshape kept stepped toward it into the new rows."""
+    reshaped, and robots on the cells the reshape kept stepped toward it into the new rows.
+    One resting on a goal the new shape keeps is `kept` while it rests there, and says so: it
+    passes open cells on by depth but not toward a call (`_deeper`), and trades only with a
+    robot leaving a pocket (`_choose_partner`), so robots on kept cells stay put while spare
+    ones walk to the new cells. A spare beside a reshaped square's seeds, whose way round was
+    a little over twice the straight way, called the new row's open cells through the kept
+    rows, and then pushed its way through them."""
     bitmap = sense.blueprint.digest(sense.group)
     changed = memory.bitmap != bitmap
+    reshaped = changed & (memory.bitmap != NO_BITMAP)
     memory.bitmap = bitmap
     memory.stuck[changed] = 0
     memory.calling[changed] = False
     memory.has_goal &= sense.blueprint.contains(sense.group, memory.goal)
+    resting = memory.has_goal & _same(memory.goal, memory.frame)
+    memory.kept = resting & (memory.kept | reshaped)
 
 
 def _guides(sense: Perception) -> np.ndarray:
@@ -712,7 +726,8 @@ def _deeper(
 ) -> np.ndarray:
     """Per robot, the way to an adjacent open cell deeper in the shape than its own, or 0.
     Deeper, for a robot with a goal that hears of a robot calling open cells to it
-    (`_relay_seekers`): farther from that robot, so stepping there brings the open cell one
+    (`_relay_seekers`), unless it rests on a cell a reshape kept (see `_reshaped`): farther
+    from that robot, so stepping there brings the open cell one
     step nearer it, and open cells travel through a formed shape to robots it walls off from
     them. A horseshoe's last two cells, open on its outer edge, waited for ever for the two
     robots in its bay; at 10,000 robots the spare ones jammed on the far side of the letter
@@ -723,7 +738,7 @@ def _deeper(
     additions, not the paper's. Each step raises the summed depth of occupied cells or
     brings an open cell nearer a calling robot, which stops calling once it has a goal."""
     depth = _depth(sense.blueprint)
-    drawn = memory.has_goal & (seeker_hops < FAR)
+    drawn = memory.has_goal & (seeker_hops < FAR) & ~memory.kept
 
     def value(cells: np.ndarray) -> np.ndarray:
         inside = depth.at(sense.group, cells)
@@ -1010,6 +1025,10 @@ def _choose_partner(
     settled = my_has & _same(mine, my_cell)
     held |= settled & their_has & _among(_key(me, their_cell), silent)
     score = np.where(~same & ~again & ~held, score, 0)
+    # a robot on a cell a reshape kept trades only with one leaving a pocket, and both ends
+    # know it (a one-sided refusal would leave the other waiting for it for good)
+    kept = memory.kept[me] & (msg[:, LEAVING] == 0) | (msg[:, KEPT] == 1) & ~leaving
+    score[kept] = 0
     number = msg[:, NUMBER]
     best = best_per_robot(len(sense), me, -score * (number.max(initial=0) + 1) + number, score > 0)
     wants = np.full(len(sense), -1, dtype=np.int64)
