@@ -62,6 +62,26 @@ def test_a_run_saved_before_its_program_kept_a_memory_slot_resumes_with_it_as_ne
         resume(tmp_path / "old.state")
 
 
+def test_a_run_saved_before_its_program_broadcast_a_field_resumes_with_it_as_0(tmp_path):
+    """`local-swap` added the message field KEPT (and the slot `kept`) after runs were saved:
+    a file without them resumes, the field as 0, and the run goes on as it would have; a
+    broadcast wider than the program's is damaged."""
+    config = config_for("local-swap")
+    whole = metrics_of(run(build(config), max_steps=50_000))
+    save(run(build(config), max_steps=23), tmp_path / "s.state", config)
+    manifest, arrays = state_members(tmp_path / "s.state")
+    del arrays["swarm.driver.memory.kept"]
+    broadcast = arrays["swarm.driver.broadcast"]
+    arrays["swarm.driver.broadcast"] = broadcast[:, :-1].copy()
+    (tmp_path / "old.state").write_bytes(state_bytes(manifest, arrays))
+    _, resumed = resume(tmp_path / "old.state")
+    assert metrics_of(run(resumed, max_steps=50_000)) == whole
+    arrays["swarm.driver.broadcast"] = np.pad(broadcast, ((0, 0), (0, 1)))
+    (tmp_path / "wide.state").write_bytes(state_bytes(manifest, arrays))
+    with pytest.raises(InputError, match="broadcast has 22 fields, expected 21"):
+        resume(tmp_path / "wide.state")
+
+
 def test_the_paper_horseshoe_resumed_at_step_37_forms_as_if_never_stopped(tmp_path):
     """The reported case: the resumed run used to hold two copies of the occupancy grid."""
     common = [str(SHAPES / "horseshoe.png"), "--strategy", "paper", "--seed", "11", "--headless"]

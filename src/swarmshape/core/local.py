@@ -120,7 +120,8 @@ class ProgramError(InputError):
 class Program(Plugin):
     """Base class of local programs. Subclass it, give it a ``name``, a one-line
     ``description``, the ``message_size`` (ints per broadcast), the ``memory`` it keeps, and
-    write `act`. Randomness comes only from the `rng` passed in."""
+    write `act`. Randomness comes only from the `rng` passed in. A broadcast field added later
+    goes at the end: a run saved before restores it as 0."""
 
     kind: ClassVar[str] = "local"
     message_size: ClassVar[int] = 0
@@ -398,8 +399,12 @@ class LocalControl:
             shape = (n,) if slot.width is None else (n, slot.width)
             value = saved.array(f"memory.{name}", slot.dtype, shape, finite=None)
             setattr(self.memory, name, value)
-        size = (n, self.program.message_size)
-        self.broadcast = saved.array("broadcast", np.int64, size)
+        broadcast = saved.array("broadcast", np.int64, (n, None))
+        width = self.program.message_size
+        if broadcast.shape[1] > width:
+            raise saved.error("broadcast", f"has {broadcast.shape[1]} fields, expected {width}")
+        # fields are only appended: one added since the file was saved reads 0 (see `Program`)
+        self.broadcast = np.pad(broadcast, ((0, 0), (0, width - broadcast.shape[1])))
         self.last_cell = saved.array("last_cell", np.int64, (n, 2))
         self.sent = saved.integer("sent", 0)
         self.lost = saved.integer("lost", 0)
