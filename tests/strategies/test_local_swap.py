@@ -215,34 +215,31 @@ def test_a_spare_robot_in_a_pocket_of_the_formed_shape_stays_there():
     assert swarm.complete
 
 
-@pytest.mark.slow
-def test_robots_passing_each_other_on_their_way_round_do_not_circle_for_ever():
-    """The 442-robot S, seed 0, stopped two cells short from step 1,250 on: two robots
-    between the arena's top edge and the S, going round it opposite ways, stepped round each
-    other in one loop of four cells, each always the same way as the other."""
-    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=30, seed=0)
-    swarm = run(build(config), max_steps=4000)
-    assert swarm.complete
-    assert swarm.overlap_total == 0
-
-
-def test_two_seekers_flipping_between_two_open_cells_in_a_bay_go_on():
-    """The 98-robot S, seed 23, waited for good: two robots without a goal in the S's bay each
-    turned between the two open cells beyond the bay's wall as the other's news came and went,
-    and every new target restarted their count, so they never called the cells to them."""
-    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=14, seed=23)
-    swarm = run(build(config), max_steps=3000)
-    assert swarm.complete
-    assert swarm.overlap_total == 0
-
-
-def test_a_robot_asked_in_turn_by_two_neighbours_trades_with_the_one_in_its_way():
-    """The 286-robot S with a fifth of its robots removed at step 50, seed 2, stopped one cell
-    short for good once robots took their bearings under way, until the robot in the way came
-    first: a robot walled in by robots on their goals answered, in turn, the asks of one three
-    cells off and of the one in its way, and neither ask was ever answered back."""
-    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=24, seed=2,
-                       faults=[FaultEvent(50, "remove", 0.2)])  # fmt: skip
-    swarm = run(build(config), max_steps=3000)
+@pytest.mark.parametrize(
+    ("cells", "seed", "faults", "steps"),
+    [
+        # The 442-robot S stopped two cells short from step 1,250 on: two robots between the
+        # arena's top edge and the S, going round it opposite ways, stepped round each other
+        # in one loop of four cells, each always the same way as the other.
+        pytest.param(30, 0, [], 4000, marks=pytest.mark.slow, id="passing-on-the-way-round"),
+        # The 98-robot S waited for good: two robots without a goal in the S's bay each
+        # turned between the two open cells beyond the bay's wall as the other's news came
+        # and went, and every new target restarted their count, so they never called the
+        # cells to them.
+        pytest.param(14, 23, [], 3000, id="two-seekers-in-a-bay"),
+        # The 286-robot S with a fifth of its robots removed at step 50 stopped one cell
+        # short for good once robots took their bearings under way, until a blocked pair came
+        # before a mere ask: a robot walled in by robots on their goals answered, in turn, the
+        # asks of one three cells off and of the one in its way, and neither ask was ever
+        # answered back.
+        pytest.param(24, 2, [FaultEvent(50, "remove", 0.2)], 3000, id="asked-in-turn"),
+    ],
+)
+def test_letter_s_runs_that_once_stopped_short_form(cells, seed, faults, steps):
+    """Runs of the letter S that once came to rest short of the shape, each by a mechanism
+    since mended (see each case)."""
+    config = configure(SHAPES / "letter-s.png", strategy="local-swap", cells=cells, seed=seed,
+                       faults=faults)  # fmt: skip
+    swarm = run(build(config), max_steps=steps)
     assert swarm.complete
     assert swarm.overlap_total == 0
