@@ -79,3 +79,18 @@ def test_a_routes_cost_falls_by_one_a_step_along_it_and_counts_the_shape_cells_i
     assert cost[-1] > len(path)  # a shape cell costs more than any walk round the shape
     off = routes.costs(shape, np.zeros(1, int), np.array([[[60, 60]]]), np.array([target]))
     assert np.isinf(off).all()
+
+
+def test_route_fields_given_up_for_room_are_worked_out_again(monkeypatch):
+    """With room for two fields, a robot's target whose field was given up gets it worked
+    out again, and every robot reads its own target's field, whatever the order of use."""
+    blueprint = blueprint_of(U)
+    cells = int(routes._box(blueprint, 0)[1].prod())
+    monkeypatch.setattr(routes, "FIELD_BYTES", 8 * cells * 2)
+    pool = routes._Fields(blueprint, 0)
+    a, b, c = (0, 0), (6, 3), (3, 3)
+    for targets in ([a, b], [c], [a, c, b], [b], [c, a]):
+        rows = pool.slots(np.array(targets))
+        for target, row in zip(targets, rows.tolist(), strict=True):
+            assert np.array_equal(pool.fields[row], routes._field(blueprint, 0, *target).ravel())
+        assert len(pool.slot) == max(2, len(targets))

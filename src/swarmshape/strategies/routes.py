@@ -11,6 +11,7 @@ those the shortest. Robots in the way are left to the local planner.
 from __future__ import annotations
 
 import functools
+import itertools
 from collections.abc import Iterator
 
 import numpy as np
@@ -164,7 +165,9 @@ with room for 512 fields every one was worked out again every step (2.2 s a step
 
 class _Fields:
     """The route fields of one group's shape, one row per target (`_field`), kept while there
-    is room (`FIELD_BYTES`), or while a single step needs them."""
+    is room (`FIELD_BYTES`), or while a single step needs them. The array doubles when it
+    grows: grown by the rows a step lacked, it was copied whole nearly every step (36 ms a
+    step at 10,000 robots)."""
 
     def __init__(self, blueprint: Blueprint, group: int) -> None:
         self.blueprint, self.group = blueprint, group
@@ -172,27 +175,30 @@ class _Fields:
         self.room = max(1, FIELD_BYTES // (8 * self.cells))
         self.fields = np.empty((0, self.cells))
         self.slot: dict[tuple[int, int], int] = {}  # in order of last use
+        self.free: list[int] = []  # rows of `fields` that hold no kept field
 
     def slots(self, targets: np.ndarray) -> np.ndarray:
         """Each target's row in `fields`, working out the fields not kept."""
         ends, which = np.unique(targets, axis=0, return_inverse=True)
         keys = [(x, y) for x, y in ends.tolist()]
-        needed = set(keys)
         for key in keys:  # the ones used now last, so they are given up last
             if key in self.slot:
                 self.slot[key] = self.slot.pop(key)
         missing = [key for key in keys if key not in self.slot]
-        spare = [
-            self.slot.pop(key)
-            for key in list(self.slot)[: max(0, len(self.slot) + len(missing) - self.room)]
-            if key not in needed
-        ]
-        grow = len(missing) - len(spare)
-        if grow > 0:
-            start = len(self.fields)
-            self.fields = np.concatenate([self.fields, np.empty((grow, self.cells))])
-            spare += range(start, start + grow)
-        for key, row in zip(missing, spare, strict=False):
+        over = len(self.slot) + len(missing) - self.room
+        if over > 0:
+            needed = set(keys)
+            for key in [key for key in itertools.islice(self.slot, over) if key not in needed]:
+                self.free.append(self.slot.pop(key))
+        lacking = len(missing) - len(self.free)
+        if lacking > 0:
+            rows = len(self.fields)
+            grown = np.empty((max(2 * rows, rows + lacking), self.cells))
+            grown[:rows] = self.fields
+            self.fields = grown
+            self.free += range(rows, len(grown))
+        for key in missing:
+            row = self.free.pop()
             self.fields[row] = _field(self.blueprint, self.group, *key).ravel()
             self.slot[key] = row
         return np.array([self.slot[key] for key in keys], dtype=np.int64)[which.reshape(-1)]
