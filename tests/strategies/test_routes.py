@@ -94,3 +94,14 @@ def test_route_fields_given_up_for_room_are_worked_out_again(monkeypatch):
         for target, row in zip(targets, rows.tolist(), strict=True):
             assert np.array_equal(pool.fields[row], routes._field(blueprint, 0, *target).ravel())
         assert len(pool.slot) == max(2, len(targets))
+
+
+def test_a_new_shape_lets_the_old_shapes_fields_go():
+    """A reshape hands robots a new blueprint: the old one's fields are not kept beside the new
+    one's, however often a session reshapes."""
+    old, new = blueprint_of(U), blueprint_of(U.replace("##...##\n#######", "#######\n#######"))
+    kept = routes._fields(old, 0)
+    kept.slots(np.array([(0, 0)]))
+    assert routes._fields(old, 0) is kept
+    routes._fields(new, 0).slots(np.array([(0, 0)]))
+    assert routes._fields(old, 0) is not kept

@@ -158,9 +158,10 @@ def _moves(blueprint: Blueprint, group: int) -> tuple[scipy.sparse.csr_matrix, n
 
 
 FIELD_BYTES = 1 << 29
-"""Memory the route fields of one shape may keep (512 MB), the least recently used given up
-first. Robots stuck outside a 10,000-robot letter S routed to 1,100 distinct targets a step:
-with room for 512 fields every one was worked out again every step (2.2 s a step)."""
+"""Memory the route fields of one group's shape may keep (512 MB), the least recently used
+given up first. Robots stuck outside a 10,000-robot letter S routed to 1,100 distinct
+targets a step: with room for 512 fields every one was worked out again every step (2.2 s
+a step)."""
 
 
 class _Fields:
@@ -204,10 +205,20 @@ class _Fields:
         return np.array([self.slot[key] for key in keys], dtype=np.int64)[which.reshape(-1)]
 
 
-@functools.lru_cache(maxsize=16)
 def _fields(blueprint: Blueprint, group: int) -> _Fields:
     """The kept route fields of one group's shape."""
-    return _Fields(blueprint, group)
+    pools = _pools(blueprint)
+    if group not in pools:
+        pools[group] = _Fields(blueprint, group)
+    return pools[group]
+
+
+@functools.lru_cache(maxsize=1)
+def _pools(blueprint: Blueprint) -> dict[int, _Fields]:
+    """The route fields of the shapes robots know now, per group: a reshape gives the robots
+    a new blueprint, and the fields of the old one go, so a session that reshapes again and
+    again keeps one set (each can fill `FIELD_BYTES`)."""
+    return {}
 
 
 def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
