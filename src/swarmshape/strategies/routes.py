@@ -167,8 +167,8 @@ a step)."""
 class _Fields:
     """The route fields of one group's shape, one row per target (`_field`), kept while there
     is room (`FIELD_BYTES`), or while a single step needs them. The array doubles when it
-    grows: grown by the rows a step lacked, it was copied whole nearly every step (36 ms a
-    step at 10,000 robots)."""
+    grows, up to the room: grown by the rows a step lacked, it was copied whole nearly every
+    step (36 ms a step at 10,000 robots)."""
 
     def __init__(self, blueprint: Blueprint, group: int) -> None:
         self.blueprint, self.group = blueprint, group
@@ -194,7 +194,7 @@ class _Fields:
         lacking = len(missing) - len(self.free)
         if lacking > 0:
             rows = len(self.fields)
-            grown = np.empty((max(2 * rows, rows + lacking), self.cells))
+            grown = np.empty((max(min(2 * rows, self.room), rows + lacking), self.cells))
             grown[:rows] = self.fields
             self.fields = grown
             self.free += range(rows, len(grown))
