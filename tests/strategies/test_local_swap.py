@@ -17,7 +17,7 @@ from swarmshape.core.metrics import run_metrics
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import local_swap
-from tests.conftest import SHAPES, grid_from, make_swarm, world_of
+from tests.conftest import SHAPES, grid_from, make_swarm, script, world_of
 
 
 def test_goal_less_robots_find_their_way_round_to_open_cells_with_messages_lost():
@@ -243,3 +243,29 @@ def test_letter_s_runs_that_once_stopped_short_form(cells, seed, faults, steps):
     swarm = run(build(config), max_steps=steps)
     assert swarm.complete
     assert swarm.overlap_total == 0
+
+
+@pytest.mark.parametrize(
+    "number",
+    [
+        # A spare claimed a cell whose holder was out of range. The holder traded its goal on;
+        # a robot in the formed shape took it for nothing gained and left its cell (`_unsure`).
+        pytest.param(12, id="a-goal-held-twice"),
+        # A spare walled in a pocket pushed its way out of the formed shape 59 steps after it
+        # formed, for an open cell whose news the robots round it had told each other since,
+        # a hop more each step (`_relay_open`).
+        pytest.param(64, id="news-that-never-aged"),
+        # A spare in a pocket, a robot's cell from an open cell, never called it (`_cut_off`).
+        pytest.param(128, id="a-pocket-beside-an-open-cell"),
+        # Faults left the shape short of robots. Once the last spare had a cell, the robots
+        # went on passing open cells toward the rim, emptying a cell each time
+        # (`_relay_spares`).
+        pytest.param(123, id="short-of-robots"),
+    ],
+)
+def test_fuzzed_cases_that_once_broke_an_invariant(number):
+    """Cases of ``scripts/fuzz_programs.py local-swap`` (random shapes with holes and pieces,
+    noise, faults; every invariant watched) that once broke one, each by a mechanism since
+    mended."""
+    fuzz = script("fuzz_programs")
+    assert fuzz.case(local_swap.LocalSwap, number, 15_000, 10.0) is None

@@ -28,8 +28,8 @@ from swarmshape.strategies.skills.view import SILENCE, paths
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
-    SX, SY, SEEKER_HOPS, LEAVING, KEPT,
-) = range(21)  # fmt: skip
+    SX, SY, SEEKER_HOPS, LEAVING, KEPT, OPEN_AGE, SPARE_HOPS, SPARE_AGE,
+) = range(24)  # fmt: skip
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
 GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
@@ -38,17 +38,19 @@ that nobody sits on or holds, and hops to the robot that sees it (see `_relay_op
 TX, TY: a goal it hears held twice, by a robot at rest on it and one still on its way (see
 `_held_twice`). SX, SY, SEEKER_HOPS: a robot without a goal that calls open cells to it, and
 hops to it (see `_relay_seekers`). LEAVING: it pushes its way out of a pocket of the shape
-(see `_leaving`). KEPT: it rests on a cell a reshape kept (see `_reshaped`)."""
+(see `_leaving`). KEPT: it rests on a cell a reshape kept (see `_reshaped`). OPEN_AGE: steps
+since the open cell (OX, OY) was last seen open. SPARE_HOPS, SPARE_AGE: hops to a robot without
+a goal, and steps since it had none (see `_relay_spares`). Ages, not steps of a clock: robots
+need not agree on the time, and the numbers stay small."""
 
 FAR = 1000
 """HOPS of a robot that hears of no localised robot at all, and OPEN_HOPS of one that knows
 of no open cell."""
 
 OPEN_REACH = 64
-"""Hops an open cell is relayed. A filled cell's news dies out by counting up to this (each
-robot takes its neighbours' fewest hops plus one), so it bounds how long a stale one lasts.
-At 24 hops, about 70 cells, the last open cells of a 10,000-robot letter S went unheard by
-twenty robots without a goal waiting 150 cells away on its other side."""
+"""Hops an open cell is relayed, and steps a robot goes on toward one it heard of. At 24
+hops, about 70 cells, the last open cells of a 10,000-robot letter S went unheard by twenty
+robots without a goal waiting 150 cells away on its other side."""
 
 CALL_REACH = 24
 """Hops a robot's call for open cells is relayed (see `_relay_seekers`): open cells travel
@@ -74,14 +76,14 @@ ROAM = 20
 PATIENCE = 4
 """Steps a robot waits behind something before it goes round it (see `_go_round`)."""
 
-PUSH_HOPS = 1
+PUSH_HOPS = 0
 """A robot without a goal trades its way into the shape through a robot resting in its way,
 toward an open cell it has news of, only if that robot is this many hops from an open cell
-or fewer, and nearer it (each push brings the robot without a goal nearer, so pushes never
-go round in a circle). So it never trades toward news that may be stale: a filled
-cell's news is gone from the robots near it within a step or two, and a formed shape stays as
-it is. Without this a robot in a horseshoe's bay never reached an open cell just beyond the
-bay's floor."""
+or fewer (0: it sees one itself), and nearer it (each push brings the robot without a goal
+nearer, so pushes never go round in a circle). So it never trades toward news that may be
+stale, and a formed shape stays as it is: at 1 hop, a spare pushed its way in for a cell
+filled two steps before, the last open cell of the shape. Without this a robot in a
+horseshoe's bay never reached an open cell just beyond the bay's floor."""
 
 STUCK = 20
 """Steps without getting nearer its target after which a robot takes a random step now and
@@ -128,7 +130,7 @@ before it calls open cells to it (see `_cut_off`)."""
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 21
+    message_size = 24
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -156,6 +158,10 @@ class LocalSwap(Program):
         "stuck": Slot(np.int64, 0),
         "heard": Slot(np.int64, 0, 2),
         "heard_hops": Slot(np.int64, FAR),
+        "heard_at": Slot(np.int64, 0, added=True),
+        "spare_hops": Slot(np.int64, FAR, added=True),
+        "spare_at": Slot(np.int64, 0, added=True),
+        "spare_until": Slot(np.int64, -1, added=True),
         "routed": Slot(bool, False),
         "silence": Slot(np.int64, 0),
         "calling": Slot(bool, False),
@@ -180,9 +186,11 @@ class LocalSwap(Program):
         occupied = _occupied(sense)
         _note_walls(sense, memory, occupied)
         seeking = memory.localised & ~memory.has_goal
+        spares = _relay_spares(sense, memory, seeking)
         sight, open_cell, by_shape = _open_in_sight(sense, memory, sense.radius)
-        news, news_hops = _relay_open(sense, memory, sense.radius, sight, open_cell)
+        news, news_hops, current = _relay_open(sense, memory, sense.radius, sight, open_cell)
         target = np.where((seeking & (news_hops < FAR))[:, None], news, memory.frame)
+        news_hops_now = np.where(current, news_hops, FAR)  # what it tells, pushes and leaves for
         unaware = seeking & (news_hops >= FAR) & ~open_cell
         memory.unaware = np.where(unaware, memory.unaware + 1, 0)
         searching = by_shape & sense.ready & (memory.unaware > SEARCH_AFTER)
@@ -191,13 +199,14 @@ class LocalSwap(Program):
             sense, memory, unaware, searching[unaware], sense.radius, rng
         )
         memory.calling = seeking & (memory.calling | _cut_off(sense, memory, seeking, target))
-        out = _leaving(sense, memory, seeking, news, news_hops)
+        out = _leaving(sense, memory, seeking, news, news_hops_now)
         target[out] = memory.frame[out] + STEPS[_way_out(sense, memory.frame[out], out)]
         here = _same(target, memory.frame)
         resting = memory.has_goal & _same(memory.goal, memory.frame)
         seeker, seeker_hops = _relay_seekers(sense, memory, memory.calling)
         way = _deeper(sense, memory, occupied, seeker, seeker_hops)
-        deepen = memory.localised & sense.ready & (way > 0) & (resting | seeking & open_cell & here)
+        passing = resting & (spares < FAR)  # holes surface only for a spare that may fill them
+        deepen = memory.localised & sense.ready & (way > 0) & (passing | seeking & open_cell & here)
         memory.goal[deepen] = memory.frame[deepen] + STEPS[way[deepen]]
         memory.has_goal[deepen] = True
         seeking &= ~deepen
@@ -218,7 +227,7 @@ class LocalSwap(Program):
         delta = waypoint - memory.frame
         preferred, first = _plan(sense, delta, behind, going, sense.radius)
         memory.wants = _choose_partner(
-            sense, memory, preferred, target, seeking, news, news_hops, rested, silent
+            sense, memory, preferred, target, seeking, news, news_hops_now, rested, silent
         )
         moves = _go_round(memory, delta, preferred, first, occupied, going & sense.ready, rng)
         lapped = memory.stuck > LAPS * STUCK  # round a loop on its route too
@@ -257,13 +266,16 @@ class LocalSwap(Program):
                 stays,
                 hops,
                 news,
-                np.minimum(news_hops, FAR),
+                news_hops_now,
                 twice,
                 twice_cell,
                 seeker,
                 np.minimum(seeker_hops, FAR),
                 memory.leaving,
                 memory.kept,
+                np.minimum(sense.step - memory.heard_at, FAR),
+                spares,
+                np.minimum(sense.step - memory.spare_at, FAR),
             ]
         ).astype(np.int64)
         return moves, messages
@@ -534,30 +546,76 @@ def _relay_open(
     radius: float,
     sight: np.ndarray,
     seen: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """An open cell each robot knows of, and hops to the robot that sees it (FAR: none): its
-    own sight, or the news with fewest hops that its neighbours relay. A robot trusts its own
-    eyes over news of a cell in its range. Robots without a goal head for it, so an open cell
-    anywhere, even deep inside the shape, draws them in; walking round the shape until one
-    came in sight took hundreds of steps on an 8 by 8 square. A robot that hears no news
-    goes on by the last it heard, a hop older each step: one in the bay of a 1,000-cell
-    letter S walked toward an open cell, out of earshot of the robots that told of it, back
-    to them, and so on for thousands of steps."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An open cell each robot knows of, hops to the robot that sees it (FAR: none), and
+    whether the news is current (`_current`): its own sight, or the current news with fewest
+    hops that its neighbours relay. A robot trusts its own eyes over news of a cell in its
+    range. Robots without a goal head for it, so an open cell anywhere, even deep inside the
+    shape, draws them in; walking round the shape until one came in sight took hundreds of
+    steps on an 8 by 8 square. A robot that hears no news goes on by the last it heard, for up
+    to `OPEN_REACH` steps: one in the bay of a 1,000-cell letter S walked toward an open cell,
+    out of earshot of the robots that told of it, back to them, and so on for thousands of
+    steps. It tells others, pushes (`PUSH_HOPS`) and leaves a pocket (`_leaving`) only for
+    current news, and takes no news of the cell it knows from a neighbour with more hops and
+    none fresher: counted in hops alone, a filled cell's news went round the robots near it a
+    hop more each step, and a robot walled in a pocket of a formed shape pushed its way out
+    for it 59 steps after the shape had formed."""
     me, msg = sense.owner, sense.message
+    hops, stamp = msg[:, OPEN_HOPS] + 1, sense.step - 1 - msg[:, OPEN_AGE]
     news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
-    news &= memory.localised[me]
+    news &= memory.localised[me] & _current(sense.step - stamp, hops)
     news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
     known = _same(msg[:, OX : OY + 1], memory.heard[me])
-    best = best_per_robot(len(sense), me, msg[:, OPEN_HOPS] - LOYALTY * known, news)
+    news &= ~known | (stamp > memory.heard_at[me]) | (hops <= memory.heard_hops[me])
+    best = best_per_robot(len(sense), me, hops - LOYALTY * known, news)
     told = (best >= 0) & ~seen
-    cell, hops = sight.copy(), np.where(seen, 0, FAR)
-    cell[told] = msg[best[told], OX : OY + 1]
-    hops[told] = msg[best[told], OPEN_HOPS] + 1
-    recall = (hops >= FAR) & (memory.heard_hops + 1 < OPEN_REACH) & memory.localised
+    cell, at = sight.copy(), np.full(len(sense), sense.step, dtype=np.int64)
+    hops_to = np.where(seen, 0, FAR)
+    cell[told], at[told] = msg[best[told], OX : OY + 1], stamp[best[told]]
+    hops_to[told] = hops[best[told]]
+    recall = (hops_to >= FAR) & (memory.heard_hops < FAR) & memory.localised
+    recall &= sense.step - memory.heard_at < OPEN_REACH
     recall &= np.hypot(*(memory.heard - memory.frame).T) > radius
-    cell[recall], hops[recall] = memory.heard[recall], memory.heard_hops[recall] + 1
-    memory.heard, memory.heard_hops = cell.copy(), hops.copy()
-    return cell, hops
+    cell[recall], hops_to[recall] = memory.heard[recall], memory.heard_hops[recall]
+    at[recall] = memory.heard_at[recall]
+    memory.heard, memory.heard_hops, memory.heard_at = cell.copy(), hops_to.copy(), at
+    return cell, hops_to, (hops_to < FAR) & _current(sense.step - at, hops_to)
+
+
+def _current(age: np.ndarray, hops: np.ndarray) -> np.ndarray:
+    """Whether news `age` steps old, from a robot `hops` away (that saw an open cell, or had
+    no goal), may still be true: relayed a hop a step it is as old as it is far, and each
+    message lost on its way makes it a step older, so it is current while no older than twice
+    its hops (as many steps late as hops: one message in two lost, `--msg-loss` 0.5, on
+    average). Once nobody renews it, it is current no more within as many steps as it is
+    hops away; counted in hops alone it went on for up to `OPEN_REACH` steps."""
+    return age <= 2 * hops
+
+
+def _relay_spares(sense: Perception, memory: Memory, seeking: np.ndarray) -> np.ndarray:
+    """Hops to the nearest robot without a goal (`seeking`) that each robot has current news
+    of (`_current`; FAR: none): itself (0), or the freshest news its neighbours relay, of
+    equals the fewest hops, unless its own is as good, current or not (so once a spare has a
+    goal, its news ages where it is and dies, instead of coming back with more hops). Robots
+    resting on their goals pass open cells on (`_deeper`) only while they know of one: once
+    the last spare had taken a cell of a shape that faults had left short of robots, the
+    others went on passing its open cells toward the rim, and the formed shape lost a cell
+    with each. A robot takes no news as old as its own last step without a goal: it may be
+    its own, echoed back."""
+    me, msg = sense.owner, sense.message
+    hops, seen = msg[:, SPARE_HOPS] + 1, sense.step - 1 - msg[:, SPARE_AGE]
+    told = sense.heard & sense.kin & ~sense.seed & (msg[:, SPARE_HOPS] < OPEN_REACH)
+    told &= _current(sense.step - seen, hops) & (seen > memory.spare_until[me])
+    key = (sense.step - seen) * (FAR + 1) + hops  # the freshest, then the fewest hops
+    best = best_per_robot(len(sense), me, key, told)
+    own = (sense.step - memory.spare_at) * (FAR + 1) + memory.spare_hops
+    better = np.flatnonzero(best >= 0)
+    better = better[key[best[better]] < own[better]]
+    memory.spare_hops[better], memory.spare_at[better] = hops[best[better]], seen[best[better]]
+    memory.spare_hops[seeking], memory.spare_at[seeking] = 0, sense.step
+    memory.spare_until[seeking] = sense.step
+    current = _current(sense.step - memory.spare_at, memory.spare_hops)
+    return np.where(current & (memory.spare_hops < FAR), memory.spare_hops, FAR)
 
 
 def _search_target(
@@ -606,19 +664,24 @@ def _nearest_cell(sense: Perception, memory: Memory, rows: np.ndarray) -> np.nda
 def _cut_off(
     sense: Perception, memory: Memory, seeking: np.ndarray, target: np.ndarray
 ) -> np.ndarray:
-    """Robots without a goal, outside the shape and stuck, that the shape walls off from the
-    open cell they head for, or whose way round to it is more than `ROUNDABOUT` times the
-    straight way (`routes.ways`): they call the open cells to them (see `_deeper`) until they
-    have a goal. One that could walk there does not, so robots on cells a reshape keeps stay
-    put while spare ones fill the new rows. One that called only while stuck stopped each
-    time the open cell came nearer, and the robots that did not hear it sent it back: in a
-    ring's hole the open cell went up and down the ring's side for good."""
-    rows = np.flatnonzero(seeking & (memory.stuck > STUCK) & ~_same(target, memory.frame))
-    rows = rows[~sense.blueprint.contains(sense.group[rows], memory.frame[rows])]
+    """Robots without a goal, outside the shape, that stand in a pocket the shape encloses,
+    or that are stuck and the shape walls off from the open cell they head for, or whose way
+    round to it is more than `ROUNDABOUT` times the straight way (`routes.ways`): they call
+    the open cells to them (see `_deeper`) until they have a goal. One that could walk there
+    does not, so robots on cells a reshape keeps stay put while spare ones fill the new rows.
+    One that called only while stuck stopped each time the open cell came nearer, and the
+    robots that did not hear it sent it back: in a ring's hole the open cell went up and down
+    the ring's side for good. One in a pocket calls at once: it can leave only through the
+    shape, however near the open cell (one a robot's cell away crossed no more of the shape
+    than a way in from outside, and was never called), and one whose news flickered between
+    three open cells never counted as stuck."""
+    outside = seeking & ~_same(target, memory.frame)
+    outside &= ~sense.blueprint.contains(sense.group, memory.frame)
+    calling = outside & (_depths(sense.blueprint)[1].at(sense.group, memory.frame) > 0)
+    rows = np.flatnonzero(outside & ~calling & (memory.stuck > STUCK))
     frame, group = memory.frame[rows], sense.group[rows]
     walked, walled = routes.ways(sense.blueprint, group, frame, target[rows])
     straight = _apart(target[rows], frame)
-    calling = np.zeros(len(sense), dtype=bool)
     calling[rows] = np.isfinite(walked) & ((walled > 0) | (walked > ROUNDABOUT * straight))
     return calling
 
@@ -1024,6 +1087,15 @@ def _choose_partner(
     held = their_has & ~resting_there & _among(_key(me, their_cell), rested)
     settled = my_has & _same(mine, my_cell)
     held |= settled & their_has & _among(_key(me, their_cell), silent)
+    # a trade that gains nothing sends a robot resting on its goal to the other's goal: only
+    # where it sees that goal or knows the shape unfinished (current news of an open cell
+    # other than its own, which it may have just claimed), and both ends know it. A spare
+    # that claimed a cell whose holder was out of range left that holder a goal already
+    # filled; traded on, it reached a robot in the formed shape that left its cell for it
+    unsure = _unsure(news[me], news_hops[me], my_cell, their_cell - mine, sense.radius)
+    held |= (gain == 0) & settled & their_has & unsure
+    unsure = _unsure(msg[:, OX : OY + 1], their_news, their_cell, my_cell - theirs, sense.radius)
+    held |= (gain == 0) & resting_there & my_has & unsure
     score = np.where(~same & ~again & ~held, score, 0)
     # a robot on a cell a reshape kept trades only with one leaving a pocket, and both ends
     # know it (a one-sided refusal would leave the other waiting for it for good)
@@ -1034,6 +1106,16 @@ def _choose_partner(
     wants = np.full(len(sense), -1, dtype=np.int64)
     wants[best >= 0] = msg[best[best >= 0], NUMBER]
     return wants
+
+
+def _unsure(
+    news: np.ndarray, hops: np.ndarray, goal: np.ndarray, offered: np.ndarray, radius: float
+) -> np.ndarray:
+    """Whether a robot resting on its `goal`, with current news of an open cell `news` `hops`
+    away (FAR: none), cannot tell that the goal it is offered, at `offered` from it, is still
+    to be filled: out of its sight, in a shape that may be formed."""
+    told = (hops < FAR) & ~_same(news, goal)
+    return ~told & (np.hypot(*offered.T) > radius)
 
 
 def _trade(sense: Perception, memory: Memory) -> None:
