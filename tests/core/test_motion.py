@@ -20,7 +20,7 @@ def brute_force_pairs(pos):
 
 POINTS = st.lists(
     st.tuples(st.floats(-6, 6, allow_nan=False), st.floats(-6, 6, allow_nan=False)),
-    max_size=40,
+    max_size=120,
 )
 
 
@@ -32,6 +32,11 @@ def test_spatial_hash_finds_exactly_the_overlapping_pairs(points):
     found = {(min(a, b), max(a, b)) for a, b in zip(i.tolist(), j.tolist(), strict=True)}
     assert len(found) == len(i), "each pair once"
     assert found == brute_force_pairs(pos)
+
+
+def test_a_square_at_no_finite_place_overlaps_nothing_and_the_others_are_still_checked():
+    pos = np.array([[np.nan, 0.5], [0.5, 0.5], [np.inf, np.inf], [0.9, 0.7]])
+    assert [pair.tolist() for pair in overlapping_pairs(pos)] == [[1], [3]]
 
 
 def test_touching_squares_do_not_overlap():

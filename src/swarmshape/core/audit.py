@@ -12,9 +12,6 @@ import numpy.typing as npt
 from swarmshape.core.compiled import njit
 from swarmshape.core.motion import STEPS, TOUCH
 
-DENSE_LIMIT = 40
-"""Squares up to which `overlapping_pairs` compares every pair instead of hashing."""
-
 
 def overlaps(
     cell: np.ndarray,
@@ -105,36 +102,44 @@ def _shared_cell_pairs(
 
 
 def overlapping_pairs(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Index pairs ``(i, j)``, ``i != j``, of unit squares that overlap, without O(n^2) work.
-
-    A spatial hash: overlapping squares have centres in the same or an adjacent cell, so
-    squares are bucketed by the cell of their centre (a sort plus dense per-cell counts and
-    starts) and each one tests only the buckets in half of its 3x3 neighbourhood. Up to
-    `DENSE_LIMIT` squares, comparing every pair at once is cheaper than building the hash.
-    """
-    n = len(pos)
-    if n < 2:
+    """Index pairs ``(i, j)``, ``i != j``, of unit squares that overlap, without O(n^2) work:
+    overlapping squares have centres in the same or an adjacent cell, so each square is tested
+    only against those already listed in the 3x3 cells round its centre's (`_close_pairs`).
+    A square whose centre is not a finite number overlaps nothing (the caller reports it)."""
+    finite = np.flatnonzero(np.isfinite(pos).all(axis=1))
+    if len(finite) < 2:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    if n <= DENSE_LIMIT:
-        close = np.abs(pos[:, None, :] - pos[None, :, :]).max(axis=2) < TOUCH
-        i, j = np.nonzero(np.triu(close, k=1))
-        return i, j
+    pos = pos[finite]
     cell = np.floor(pos).astype(np.int64)
-    cell -= cell.min(axis=0) - 1  # a free ring of buckets around, so neighbours stay in range
-    stride = int(cell[:, 1].max()) + 2
-    key = cell[:, 0] * stride + cell[:, 1]
-    count = np.bincount(key, minlength=(int(cell[:, 0].max()) + 2) * stride)
-    start = np.cumsum(count) - count
-    order = np.argsort(key, kind="stable")
-    found_i, found_j = [], []
-    for dx, dy in ((0, 0), (1, -1), (1, 0), (1, 1), (0, 1)):
-        wanted = key + dx * stride + dy
-        hits = count[wanted]
-        i = np.repeat(np.arange(n), hits)
-        rank = np.arange(len(i)) - np.repeat(np.cumsum(hits) - hits, hits)
-        j = order[np.repeat(start[wanted], hits) + rank]
-        keep = i < j if (dx, dy) == (0, 0) else np.ones(len(i), dtype=bool)
-        keep &= np.abs(pos[i] - pos[j]).max(axis=1) < TOUCH
-        found_i.append(i[keep])
-        found_j.append(j[keep])
-    return np.concatenate(found_i), np.concatenate(found_j)
+    cell -= cell.min(axis=0) - 1  # a free ring of cells around, so neighbours stay in range
+    pairs = finite[_close_pairs(pos, cell, int(cell[:, 1].max()) + 2, int(cell[:, 0].max()) + 2)]
+    return pairs[:, 0], pairs[:, 1]
+
+
+@njit
+def _close_pairs(
+    pos: np.ndarray, cell: np.ndarray, stride: int, rows: int
+) -> npt.NDArray[np.int64]:  # pragma: no cover (compiled)  # fmt: skip
+    """Pairs ``(k, 2)`` of squares closer than `TOUCH` on both axes: each square goes into its
+    cell's list (`first` holds a list's latest entry, `after` the entry before it) after it is
+    tested against the lists of the nine cells round it."""
+    first = np.full(rows * stride, -1, dtype=np.int64)
+    after = np.empty(len(pos), dtype=np.int64)
+    found: list[tuple[int, int]] = []
+    for square in range(len(pos)):
+        home = cell[square, 0] * stride + cell[square, 1]
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                other = first[home + dx * stride + dy]
+                while other >= 0:
+                    apart = max(
+                        abs(pos[other, 0] - pos[square, 0]), abs(pos[other, 1] - pos[square, 1])
+                    )
+                    if apart < TOUCH:
+                        found.append((other, square))
+                    other = after[other]
+        after[square], first[home] = first[home], square
+    pairs = np.empty((len(found), 2), dtype=np.int64)
+    for k in range(len(found)):
+        pairs[k, 0], pairs[k, 1] = found[k]
+    return pairs
