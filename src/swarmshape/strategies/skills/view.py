@@ -28,38 +28,83 @@ class View:
     def __init__(self, sense: Perception, reach: int, coming: np.ndarray | None = None) -> None:
         n, r = len(sense), reach
         self.reach = r
-        own = sense.progress[:, None] * STEPS[sense.heading]
-        self.cells = np.rint(sense.offset + own[sense.owner]).astype(np.int64)
-        """Each entry's cell relative to its robot's own cell."""
         side = 2 * r + 1
         # the squares inside a border of free cells, where a look beyond them lands (`at`)
         self._taken = np.zeros((n, side + 2, side + 2), dtype=bool)
         self._who = np.full((n, side + 2, side + 2), -1, dtype=np.int64)
         self.taken = self._taken[:, 1:-1, 1:-1]
         self.who = self._who[:, 1:-1, 1:-1]
-        entries = np.arange(len(sense.owner))
-        near = (np.abs(self.cells) <= r).all(axis=1)
-        self._mark(sense.owner[near], self.cells[near], entries[near])
-        if coming is not None:
-            going = np.flatnonzero(coming > 0)
-            ahead = self.cells[going] + STEPS[coming[going]]
-            near = (np.abs(ahead) <= r).all(axis=1)
-            self._mark(sense.owner[going[near]], ahead[near], going[near])
-
-    def _mark(self, robots: np.ndarray, cells: np.ndarray, entries: np.ndarray) -> None:
-        r = self.reach
-        self.taken[robots, cells[:, 0] + r, cells[:, 1] + r] = True
-        self.who[robots, cells[:, 0] + r, cells[:, 1] + r] = entries
+        if coming is None:
+            coming = np.zeros(len(sense.owner), dtype=np.int64)
+        self.cells = np.empty((len(sense.owner), 2), dtype=np.int64)
+        """Each entry's cell relative to its robot's own cell."""
+        _mark(sense.offset, sense.progress, sense.heading, sense.owner, coming, r,
+              self.cells, self._taken, self._who)  # fmt: skip
 
     def at(self, robots: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each robot senses something on a cell relative to its own, and the entry of
         the neighbour there (-1: none). Cells beyond its window are free as far as it knows."""
-        bordered = 2 * self.reach + 3  # the side of a square with its border
-        at = cells + (self.reach + 1)
-        np.minimum(np.maximum(at, 0, out=at), bordered - 1, out=at)
-        # one flat index for both gathers: three index arrays each cost three times as much
-        flat = (robots * bordered + at[:, 0]) * bordered + at[:, 1]
-        return self._taken.reshape(-1).take(flat), self._who.reshape(-1).take(flat)
+        taken = np.empty(len(robots), dtype=bool)
+        who = np.empty(len(robots), dtype=np.int64)
+        _look(self._taken, self._who, robots, cells, self.reach, taken, who)
+        return taken, who
+
+
+@njit
+def _mark(
+    offset: np.ndarray,
+    progress: np.ndarray,
+    heading: np.ndarray,
+    owner: np.ndarray,
+    coming: np.ndarray,
+    reach: int,
+    cells: np.ndarray,
+    taken: np.ndarray,
+    who: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
+    """`View`'s squares in one pass over the entries, then one over those coming: a dozen
+    numpy passes over a 10,000-robot swarm's 190,000 entries cost `mean-shift` a sixth of its
+    step. An entry marks its cell, and then its cell ahead if it is under way; a later mark on
+    the same cell wins."""
+    for entry in range(len(owner)):
+        robot = owner[entry]
+        for axis in range(2):
+            own = progress[robot] * STEPS[heading[robot], axis]
+            cells[entry, axis] = np.int64(np.rint(offset[entry, axis] + own))
+        _put(taken, who, robot, cells[entry, 0], cells[entry, 1], reach, entry)
+    for entry in range(len(owner)):
+        if coming[entry] > 0:
+            x = cells[entry, 0] + STEPS[coming[entry], 0]
+            y = cells[entry, 1] + STEPS[coming[entry], 1]
+            _put(taken, who, owner[entry], x, y, reach, entry)
+
+
+@njit
+def _put(
+    taken: np.ndarray, who: np.ndarray, robot: int, x: int, y: int, reach: int, entry: int
+) -> None:  # pragma: no cover (compiled)
+    if abs(x) <= reach and abs(y) <= reach:
+        taken[robot, x + reach + 1, y + reach + 1] = True
+        who[robot, x + reach + 1, y + reach + 1] = entry
+
+
+@njit
+def _look(
+    taken: np.ndarray,
+    who: np.ndarray,
+    robots: np.ndarray,
+    cells: np.ndarray,
+    reach: int,
+    seen: np.ndarray,
+    entry: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
+    """`View.at`: a look beyond the window lands on the border, which is free."""
+    last = 2 * reach + 2
+    for k in range(len(robots)):
+        x = min(max(cells[k, 0] + reach + 1, 0), last)
+        y = min(max(cells[k, 1] + reach + 1, 0), last)
+        seen[k] = taken[robots[k], x, y]
+        entry[k] = who[robots[k], x, y]
 
 
 def paths(blocked: np.ndarray, sources: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
