@@ -37,23 +37,25 @@ class Around:
 
     def __init__(self, blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, reach: int):
         self.reach = reach
-        self._inside = blueprint.number_around(groups, frame, reach) >= 0
-        self._depth = _depths(blueprint).around(groups, frame, reach)
+        self.inside = blueprint.number_around(groups, frame, reach) >= 0
+        """Per robot ``(n, side, side)``, its frame cell in the middle: in its shape or not."""
+        self.depths = _depths(blueprint).around(groups, frame, reach)
+        """The same square's `depth`s, for a compiled pass that looks up many (`_at`)."""
         sealed = _sealed(blueprint)
         self._sealed = None if sealed is None else sealed.around(groups, frame, reach)
 
     def contains(self, offsets: np.ndarray) -> np.ndarray:
-        return self._at(self._inside, offsets)
+        return self._at(self.inside, offsets)
 
     def depth(self, offsets: np.ndarray, robots: np.ndarray | None = None) -> np.ndarray:
         """Per robot (of `robots` only, if given, their offsets ``(k, ..., 2)``)."""
-        return self._at(self._depth, offsets, robots)
+        return self._at(self.depths, offsets, robots)
 
     def sealed(self, offsets: np.ndarray) -> np.ndarray:
         """Whether each cell lies in a piece of the shape that touches no cell of the outside,
         only pockets that other pieces enclose (`Shape.sealed`)."""
         if self._sealed is None:  # no group's shape has such a piece
-            return np.zeros_like(self._at(self._inside, offsets))
+            return np.zeros_like(self._at(self.inside, offsets))
         return self._at(self._sealed, offsets)
 
     @property

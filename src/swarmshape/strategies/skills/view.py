@@ -30,23 +30,23 @@ class View:
         self.reach = r
         side = 2 * r + 1
         # the squares inside a border of free cells, where a look beyond them lands (`at`)
-        self._taken = np.zeros((n, side + 2, side + 2), dtype=bool)
-        self._who = np.full((n, side + 2, side + 2), -1, dtype=np.int64)
-        self.taken = self._taken[:, 1:-1, 1:-1]
-        self.who = self._who[:, 1:-1, 1:-1]
+        self.bordered_taken = np.zeros((n, side + 2, side + 2), dtype=bool)
+        self.bordered_who = np.full((n, side + 2, side + 2), -1, dtype=np.int64)
+        self.taken = self.bordered_taken[:, 1:-1, 1:-1]
+        self.who = self.bordered_who[:, 1:-1, 1:-1]
         if coming is None:
             coming = np.zeros(len(sense.owner), dtype=np.int64)
         self.cells = np.empty((len(sense.owner), 2), dtype=np.int64)
         """Each entry's cell relative to its robot's own cell."""
         _mark(sense.offset, sense.progress, sense.heading, sense.owner, coming, r,
-              self.cells, self._taken, self._who)  # fmt: skip
+              self.cells, self.bordered_taken, self.bordered_who)  # fmt: skip
 
     def at(self, robots: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each robot senses something on a cell relative to its own, and the entry of
         the neighbour there (-1: none). Cells beyond its window are free as far as it knows."""
         taken = np.empty(len(robots), dtype=bool)
         who = np.empty(len(robots), dtype=np.int64)
-        _look(self._taken, self._who, robots, cells, self.reach, taken, who)
+        _look(self.bordered_taken, self.bordered_who, robots, cells, self.reach, taken, who)
         return taken, who
 
 
