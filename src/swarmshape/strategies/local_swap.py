@@ -351,12 +351,15 @@ def _cruise(sense: Perception, onward: np.ndarray) -> np.ndarray:
     cell, against two at top speed, and a robot that had lost its bearings fell behind the
     robots it followed to the shape, lost sight of them, and searched the arena for hundreds
     of steps."""
-    rows = np.flatnonzero(sense.cruising & (onward == sense.heading) & (onward > 0))
+    going = sense.cruising & (onward == sense.heading) & (onward > 0)
+    rows = np.flatnonzero(going)
     beyond = np.zeros((len(sense), 2))  # the cell after the next, from where it is now
     beyond[rows] = (2 - sense.progress[rows, None]) * STEPS[sense.heading[rows]]
-    near = np.abs(sense.offset - beyond[sense.owner]).max(axis=1) < 1
+    entries = np.flatnonzero(going[sense.owner])  # the neighbours of those going on
+    owner = sense.owner[entries]
+    near = _within(sense.offset[entries] - beyond[owner], 1, strict=True)
     free = np.ones(len(sense), dtype=bool)
-    free[sense.owner[near]] = False
+    free[owner[near]] = False
     moves = np.zeros(len(sense), dtype=np.int64)
     moves[rows[free[rows]]] = sense.heading[rows[free[rows]]]
     return moves
