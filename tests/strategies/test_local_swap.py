@@ -249,7 +249,7 @@ def test_letter_s_runs_that_once_stopped_short_form(cells, seed, faults, steps):
     "number",
     [
         # A spare claimed a cell whose holder was out of range. The holder traded its goal on;
-        # a robot in the formed shape took it for nothing gained and left its cell (`_unsure`).
+        # a robot in the formed shape took it for nothing gained and left its cell (`_partners`).
         pytest.param(12, id="a-goal-held-twice"),
         # A spare walled in a pocket pushed its way out of the formed shape 59 steps after it
         # formed, for an open cell whose news the robots round it had told each other since,
