@@ -635,19 +635,16 @@ def _relay_open(
     none fresher: counted in hops alone, a filled cell's news went round the robots near it a
     hop more each step, and a robot walled in a pocket of a formed shape pushed its way out
     for it 59 steps after the shape had formed."""
-    me, msg = sense.owner, sense.message
-    hops, stamp = msg[:, OPEN_HOPS] + 1, sense.step - 1 - msg[:, OPEN_AGE]
-    news = sense.heard & sense.kin & ~sense.seed & (msg[:, OPEN_HOPS] < OPEN_REACH)
-    news &= memory.localised[me] & _current(sense.step - stamp, hops)
-    news &= np.hypot(*(msg[:, OX : OY + 1] - memory.frame[me]).T) > radius
-    known = _same(msg[:, OX : OY + 1], memory.heard[me])
-    news &= ~known | (stamp > memory.heard_at[me]) | (hops <= memory.heard_hops[me])
-    best = best_per_robot(len(sense), me, hops - LOYALTY * known, news)
+    msg = sense.message
+    best = _news_heard(
+        sense.owner, sense.heard & sense.kin & ~sense.seed, msg, sense.step, memory.localised,
+        memory.frame, memory.heard, memory.heard_at, memory.heard_hops, radius,
+    )  # fmt: skip
     told = (best >= 0) & ~seen
     cell, at = sight.copy(), np.full(len(sense), sense.step, dtype=np.int64)
     hops_to = np.where(seen, 0, FAR)
-    cell[told], at[told] = msg[best[told], OX : OY + 1], stamp[best[told]]
-    hops_to[told] = hops[best[told]]
+    cell[told], at[told] = msg[best[told], OX : OY + 1], sense.step - 1 - msg[best[told], OPEN_AGE]
+    hops_to[told] = msg[best[told], OPEN_HOPS] + 1
     recall = (hops_to >= FAR) & (memory.heard_hops < FAR) & memory.localised
     recall &= sense.step - memory.heard_at < OPEN_REACH
     recall &= np.hypot(*(memory.heard - memory.frame).T) > radius
@@ -657,7 +654,46 @@ def _relay_open(
     return cell, hops_to, (hops_to < FAR) & _current(sense.step - at, hops_to)
 
 
-def _current(age: np.ndarray, hops: np.ndarray) -> np.ndarray:
+@njit
+def _news_heard(
+    owner: np.ndarray,
+    heard: np.ndarray,
+    msg: np.ndarray,
+    step: int,
+    localised: np.ndarray,
+    frame: np.ndarray,
+    known_cell: np.ndarray,
+    known_at: np.ndarray,
+    known_hops: np.ndarray,
+    radius: float,
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`_relay_open`'s choice among the `heard` entries, in reach order: per localised robot,
+    the entry with the fewest hops (`LOYALTY` fewer for the cell it knows of, and of equals
+    the nearest) that tells current news of an open cell out of its sight, and not the cell it
+    knows of with more hops and none fresher; or -1. As numpy passes, gathering each robot's
+    frame and news for every entry, it took a tenth of the step at 10,000 robots."""
+    best = np.full(len(localised), -1, dtype=np.int64)
+    least = np.zeros(len(localised), dtype=np.int64)
+    for e in range(len(owner)):
+        m = owner[e]
+        if not heard[e] or not localised[m] or msg[e, OPEN_HOPS] >= OPEN_REACH:
+            continue
+        hops, stamp = msg[e, OPEN_HOPS] + 1, step - 1 - msg[e, OPEN_AGE]
+        x, y = msg[e, OX], msg[e, OY]
+        away = np.hypot(float(x - frame[m, 0]), float(y - frame[m, 1]))
+        if not _current(step - stamp, hops) or away <= radius:
+            continue
+        known = x == known_cell[m, 0] and y == known_cell[m, 1]
+        if known and stamp <= known_at[m] and hops > known_hops[m]:
+            continue
+        key = hops - LOYALTY * known
+        if best[m] < 0 or key < least[m]:
+            best[m], least[m] = e, key
+    return best
+
+
+@njit
+def _current(age: Any, hops: Any) -> Any:  # pragma: no cover (compiled)
     """Whether news `age` steps old, from a robot `hops` away (that saw an open cell, or had
     no goal), may still be true: relayed a hop a step it is as old as it is far, and each
     message lost on its way makes it a step older, so it is current while no older than twice
