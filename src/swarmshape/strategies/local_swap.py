@@ -447,16 +447,34 @@ def _held_by_others(
 def _goals_at_rest(sense: Perception, memory: Memory) -> np.ndarray:
     """Sorted keys (`_key`) of each robot and a goal it knows a robot rests on: a neighbour
     that says so, or itself."""
-    me, msg = sense.owner, sense.message
-    theirs = msg[:, X : Y + 1]
-    resting = sense.heard & sense.kin & ~sense.seed & (msg[:, LOCALISED] == 1)
-    resting &= (msg[:, STAYS] == 1) & (msg[:, HAS] == 1) & _same(theirs, msg[:, GX : GY + 1])
+    heard = sense.heard & sense.kin & ~sense.seed
     own = memory.localised & memory.has_goal & _same(memory.frame, memory.goal)
     return np.sort(
         np.concatenate(
-            [_key(me[resting], theirs[resting]), _key(np.flatnonzero(own), memory.goal[own])]
+            [
+                _resting_keys(sense.owner, heard, sense.message),
+                _key(np.flatnonzero(own), memory.goal[own]),
+            ]
         )
     )
+
+
+@njit
+def _resting_keys(
+    owner: np.ndarray, heard: np.ndarray, msg: np.ndarray
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`_key` of each robot and the goal of each localised neighbour it hears (`heard`)
+    resting on it, entry by entry (as numpy passes, a twentieth of the step at 10,000
+    robots)."""
+    keys = np.empty(len(owner), dtype=np.int64)
+    count = 0
+    for e in range(len(owner)):
+        x, y = msg[e, X], msg[e, Y]
+        still = msg[e, LOCALISED] == 1 and msg[e, STAYS] == 1
+        if heard[e] and still and msg[e, HAS] == 1 and x == msg[e, GX] and y == msg[e, GY]:
+            keys[count] = _key_of(owner[e], x, y)
+            count += 1
+    return keys[:count]
 
 
 def _key(robot: np.ndarray, cell: np.ndarray) -> np.ndarray:
@@ -936,17 +954,30 @@ def _deeper(
 
     best = value(memory.frame)
     inside = best > 0
-    held = np.zeros_like(occupied)
-    me, msg = sense.owner, sense.message
-    talk = sense.heard & sense.kin & ~sense.seed & (msg[:, HAS] == 1)
-    relative = msg[:, GX : GY + 1] - memory.frame[me]
+    talk = sense.heard & sense.kin & ~sense.seed
+    held = _held_beside(sense.owner, talk, sense.message, memory.frame)
     way = np.zeros(len(sense), dtype=np.int64)
     for direction in range(1, len(STEPS)):
-        held[me[talk & _same(relative, STEPS[direction])], direction] = True
         there = value(memory.frame + STEPS[direction])
         better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
         best, way = np.where(better, there, best), np.where(better, direction, way)
     return np.where(inside, way, 0)
+
+
+@njit
+def _held_beside(
+    owner: np.ndarray, talk: np.ndarray, msg: np.ndarray, frame: np.ndarray
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """``(n, len(STEPS))``: whether a neighbour each robot hears (`talk`) holds the cell one
+    step away in each direction as its goal. As numpy passes, gathering every robot's frame
+    for each of its entries, it took a tenth of `local-swap`'s step at 10,000 robots."""
+    held = np.zeros((len(frame), len(STEPS)), dtype=np.bool_)
+    for e in range(len(owner)):
+        m = owner[e]
+        dx, dy = msg[e, GX] - frame[m, 0], msg[e, GY] - frame[m, 1]
+        if talk[e] and msg[e, HAS] == 1 and abs(dx) + abs(dy) == 1:
+            held[m, DIRECTION_OF[dx + 1, dy + 1]] = True
+    return held
 
 
 def _depth(blueprint: Blueprint) -> Boxes:
