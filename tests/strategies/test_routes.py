@@ -6,6 +6,9 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import scipy
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from swarmshape.core.perception import Blueprint
 from swarmshape.strategies import routes
@@ -105,3 +108,31 @@ def test_a_new_shape_lets_the_old_shapes_fields_go():
     assert routes._fields(old, 0) is kept
     routes._fields(new, 0).slots(np.array([(0, 0)]))
     assert routes._fields(old, 0) is not kept
+
+
+def scipy_field(cost: np.ndarray, seeds: np.ndarray, start: int, columns: int) -> np.ndarray:
+    """`routes._cheapest` worked out by scipy's Dijkstra, as the routes were before it: a
+    graph of steps between side neighbours, none into or out of a seed, each paying the cost
+    of the cell it leaves (from the start outward), plus the cost of the cell reached."""
+    index = np.arange(len(cost)).reshape(-1, columns)
+    edges = []
+    for a, b in ((index[1:], index[:-1]), (index[:, 1:], index[:, :-1])):
+        for one, other in ((a.ravel(), b.ravel()), (b.ravel(), a.ravel())):
+            ok = ~seeds[one] & ~seeds[other]
+            edges.append((one[ok], other[ok], cost[one[ok]]))
+    one, other, weight = (np.concatenate(part) for part in zip(*edges, strict=True))
+    graph = scipy.sparse.coo_matrix((weight, (one, other)), shape=(len(cost),) * 2).tocsr()
+    return scipy.sparse.csgraph.dijkstra(graph, indices=start) + cost
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(3, 9), st.integers(3, 9), st.data())
+def test_route_fields_are_what_dijkstras_method_gives_on_the_same_graph(rows, columns, data):
+    """Random boxes of free, shape and seed cells, from any start (a seed too)."""
+    kinds = data.draw(st.lists(st.sampled_from("..#s"), min_size=rows * columns,
+                               max_size=rows * columns))  # fmt: skip
+    seeds = np.array([kind == "s" for kind in kinds])
+    cost = np.where(np.array([kind == "." for kind in kinds]), 1.0, float(rows * columns))
+    start = data.draw(st.integers(0, rows * columns - 1))
+    expected = scipy_field(cost, seeds, start, columns)
+    assert np.array_equal(routes._cheapest(cost, seeds, start, columns), expected)

