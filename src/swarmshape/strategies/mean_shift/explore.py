@@ -77,8 +77,8 @@ def mean_shift(
     n, offsets = len(sense), window.offsets
     r = view.reach
     taken = view.taken[:, offsets[:, 0] + r, offsets[:, 1] + r]
-    relative = offsets[None] - base[:, None, :]
-    free = around.contains(offsets[None]) & ~taken & relative.any(axis=2)
+    away = (offsets[None, :, 0] != base[:, None, 0]) | (offsets[None, :, 1] != base[:, None, 1])
+    free = around.contains(offsets[None]) & ~taken & away
     rows = np.flatnonzero(outside)
     reach = walkable(view.taken[rows], base[rows], offsets)
     free[rows] &= reach[:, offsets[:, 0] + r, offsets[:, 1] + r]
@@ -86,7 +86,8 @@ def mean_shift(
     total = weight.sum(axis=1)
     sees = total > 0
     shift = np.zeros((n, 2))
-    shift[sees] = np.einsum("nk,nkd->nd", weight[sees], relative[sees]) / total[sees, None]
+    relative = offsets[None] - base[sees][:, None, :]
+    shift[sees] = np.einsum("nk,nkd->nd", weight[sees], relative) / total[sees, None]
     return shift, free
 
 
