@@ -575,19 +575,16 @@ def _open_in_sight(
     cell and back to its news every few steps, never counted as stuck, and so never went
     round the shape to the open cells (a star, seed 3)."""
     recent = memory.gave & (memory.since_trade < TABU)
-    disc = _disc(radius)
-    n = len(sense)
-    cells = memory.frame[:, None, :] + disc[None, :, :]
-    groups = np.repeat(sense.group, len(disc))
-    inside = sense.blueprint.contains(groups, cells.reshape(-1, 2)).reshape(n, len(disc))
+    disc, reach = _disc(radius), int(radius)
+    numbers = sense.blueprint.number_around(sense.group, memory.frame, reach)
+    inside = numbers[:, disc[:, 0] + reach, disc[:, 1] + reach] >= 0
     holds = sense.heard & sense.kin & ~sense.seed & (sense.message[:, HAS] == 1)
     taken = _taken(
         sense.owner, _cells(sense), holds, sense.message, memory.frame, memory.has_goal,
         memory.goal, recent, memory.given, _disc_index(radius),
     )  # fmt: skip
     free = inside & ~taken & (memory.localised & sense.ready)[:, None]
-    nearest = free.argmax(axis=1)
-    return cells[np.arange(n), nearest], free.any(axis=1), inside.any(axis=1)
+    return memory.frame + disc[free.argmax(axis=1)], free.any(axis=1), inside.any(axis=1)
 
 
 @njit
