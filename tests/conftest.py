@@ -13,6 +13,7 @@ import tempfile
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from types import ModuleType
 
@@ -28,16 +29,19 @@ from swarmshape.strategies import create
 SHAPES = Path(__file__).resolve().parent.parent / "shapes"
 
 # The suite's own pace: enough examples of each property to catch a rule broken anywhere common,
-# in the few minutes a change's test run may take. `--slow` runs twenty times as many, and the
-# tests marked slow (large swarms, long regressions): what a night run is for. `scripts/test`
-# (and so CI) checks the same examples every run ("ci"), so a change is judged on what it
-# changed and a red build always reproduces; plain `pytest` draws new ones and so keeps
-# exploring.
+# in the few minutes a change's test run may take. `--slow` runs twenty times as many, the
+# tests marked slow (large swarms, long regressions) and every case of the matrices that
+# `each_choice` thins out: what a night run is for. `scripts/test` (and so CI) checks the same
+# examples every run ("ci"), so a change is judged on what it changed and a red build always
+# reproduces; plain `pytest` draws new ones and so keeps exploring.
 settings.register_profile("quick", max_examples=50)
 settings.register_profile("ci", parent=settings.get_profile("quick"), derandomize=True,
                           print_blob=True)  # fmt: skip
 settings.register_profile("slow", max_examples=1000)
 settings.load_profile(os.environ.get("SWARMSHAPE_HYPOTHESIS_PROFILE", "quick"))
+WHOLE_RUN_EXAMPLES = 10
+"""Examples by default of a property each of whose examples is a whole run or two (in all, over
+its parametrised cases): `--slow` gives it the profile's thousand."""
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -50,6 +54,8 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "slow: runs only with --slow (large swarms, long runs)")
     if config.getoption("--slow"):
         settings.load_profile("slow")
+        global WHOLE_RUN_EXAMPLES
+        WHOLE_RUN_EXAMPLES = settings().max_examples
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
@@ -70,6 +76,33 @@ def slow_for(slow: str, param: str) -> object:
     """`param` of a parametrised test, marked slow when it is `slow` (a plug-in whose runs of
     the test take a minute where the others take seconds)."""
     return pytest.param(param, marks=pytest.mark.slow) if param == slow else param
+
+
+def whole_runs(cases: int = 1) -> int:
+    """`max_examples` for each of the `cases` of a property whose examples are whole runs: its
+    share of `WHOLE_RUN_EXAMPLES`, at least one."""
+    return max(1, WHOLE_RUN_EXAMPLES // cases)
+
+
+def each_choice(cases: Iterable[Sequence[object]]) -> list[object]:
+    """The `cases` of a parametrised test (one value per argument each), those beyond a few
+    marked slow: the default run keeps a handful in which every value of every argument
+    appears at least once (each-choice coverage, chosen greedily and so the same every run,
+    which pairs the arguments' values off much as a diagonal would); `--slow` runs them all."""
+    cases = [tuple(case) for case in cases]
+    covered: set[tuple[int, object]] = set()
+    kept: set[int] = set()
+    while True:
+        new = [len(set(enumerate(case)) - covered) for case in cases]
+        best = max(range(len(cases)), key=new.__getitem__)
+        if new[best] == 0:
+            break
+        kept.add(best)
+        covered |= set(enumerate(cases[best]))
+    return [
+        pytest.param(*case, marks=() if index in kept else pytest.mark.slow)
+        for index, case in enumerate(cases)
+    ]
 
 
 @pytest.fixture

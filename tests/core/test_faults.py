@@ -5,6 +5,7 @@ same seed, and a run saved mid-fault resumes byte for byte."""
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 
 import numpy as np
@@ -32,7 +33,7 @@ from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import Runner, load_world, resume, save, start_cells, start_swarm
 from swarmshape.session import summary_line
 from swarmshape.strategies import available, create
-from tests.conftest import SHAPES, grid_from, slow_for, world_of
+from tests.conftest import SHAPES, each_choice, grid_from, slow_for, world_of
 
 STRATEGIES = sorted(available())
 REPAIRING = [s for s in STRATEGIES if not getattr(available()[s], "grows_from_seeds", False)]
@@ -87,9 +88,10 @@ def watched_run(strategy: str, kind: str, spares: int, seed: int = 5):
     return swarm, watch
 
 
-@pytest.mark.parametrize("spares", [0, 8])
-@pytest.mark.parametrize("kind", sorted(KINDS))
-@pytest.mark.parametrize("strategy", REPAIRING)
+@pytest.mark.parametrize(
+    ("strategy", "kind", "spares"),
+    each_choice(itertools.product(REPAIRING, sorted(KINDS), [0, 8])),
+)
 def test_each_fault_kind_heals_under_each_strategy(strategy, kind, spares):
     swarm, watch = watched_run(strategy, kind, spares)
     assert watch.problems == []
@@ -193,8 +195,9 @@ def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
     assert swarm.complete and swarm.filled.any()
 
 
-@pytest.mark.parametrize("rotation", [0, 90])
-@pytest.mark.parametrize("strategy", REPAIRING)
+@pytest.mark.parametrize(
+    ("strategy", "rotation"), each_choice(itertools.product(REPAIRING, [0, 90]))
+)
 def test_a_shape_dead_at_every_copy_where_it_stands_re_forms_nearby(strategy, rotation):
     """A formed 3x3 square: robots stall on its 2x2 corner by the seeds and one more is
     removed, so the 4 that can move cannot fill the 5 cells left, and every smaller copy (all

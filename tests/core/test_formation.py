@@ -16,7 +16,7 @@ from swarmshape.io.bitmap import load_grid
 from swarmshape.io.scenario import load_scenario
 from swarmshape.runs import run
 from swarmshape.strategies import available, create
-from tests.conftest import SHAPES, grid_from, make_swarm, slow_for
+from tests.conftest import SHAPES, each_choice, grid_from, make_swarm, slow_for
 
 STRATEGIES = sorted(available())
 CENTRAL = [name for name in STRATEGIES if available()[name].kind == "central"]
@@ -39,15 +39,16 @@ def grows_from_seeds(strategy: str) -> bool:
     return getattr(available()[strategy], "grows_from_seeds", False)
 
 
-def shipped_with(strategies: list[str]) -> list[tuple[str, str]]:
+def shipped_with(strategies: list[str]) -> list[object]:
     """Every shipped shape with each of `strategies`, but only solid shapes (`Shape.solid`)
-    for a strategy that grows from the seeds."""
-    return [
+    for a strategy that grows from the seeds; by default each shape with one of them and each
+    of them on one shape (`each_choice`)."""
+    return each_choice(
         (name, strategy)
         for name in PAPER_SHAPES + DRAWN_SHAPES
         for strategy in strategies
         if not grows_from_seeds(strategy) or Shape(shipped(name)).seeded().is_solid
-    ]
+    )
 
 
 def formed(swarm: Swarm) -> Swarm:

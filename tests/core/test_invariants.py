@@ -4,9 +4,11 @@ every strategy (hypothesis; more examples with ``pytest --slow``), watched by th
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmshape.check import InvariantWatch
@@ -17,6 +19,7 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import Runner
 from swarmshape.strategies import available, create
+from tests.conftest import each_choice, whole_runs
 
 STRATEGIES = sorted(available())
 
@@ -37,7 +40,7 @@ def watched(swarm: Swarm, steps: int) -> InvariantWatch:
 
 
 @pytest.mark.parametrize("strategy", STRATEGIES)
-@settings(deadline=None, max_examples=max(1, settings().max_examples // len(STRATEGIES)))
+@settings(deadline=None, max_examples=whole_runs(len(STRATEGIES)))
 @given(
     bits=st.lists(st.booleans(), min_size=20, max_size=20),
     spare=st.integers(-3, 6),
@@ -45,7 +48,7 @@ def watched(swarm: Swarm, steps: int) -> InvariantWatch:
     seed=st.integers(0, 2**32 - 1),
 )
 def test_invariants_hold_at_every_step(strategy, bits, spare, room, seed):
-    """The profile's examples are shared out over the strategies, so each gets its share."""
+    """The examples are shared out over the strategies, so each gets its share."""
     grid = np.array(bits).reshape(4, 5)
     if not grid.any():
         grid[1, 1] = True
@@ -64,14 +67,8 @@ def test_invariants_hold_at_every_step(strategy, bits, spare, room, seed):
     assert np.array_equal(swarms[0].state, swarms[1].state)
 
 
-STALLED_ON_A_GOAL = [
-    [bit == "#" for bit in "##.#.#.###...##.#.#."],
-    [bit == "#" for bit in "##...#.###...##.#.#."],
-]
-
-
 @pytest.mark.parametrize("strategy", STRATEGIES)
-@settings(deadline=None, max_examples=max(1, settings().max_examples // (3 * len(STRATEGIES))))
+@settings(deadline=None, max_examples=whole_runs(3 * len(STRATEGIES)))
 @given(
     bits=st.lists(st.booleans(), min_size=20, max_size=20),
     spare=st.integers(-3, 6),
@@ -94,42 +91,65 @@ STALLED_ON_A_GOAL = [
     rate=st.sampled_from([0.0, 0.0, 0.002]),
     second=st.one_of(st.none(), st.lists(st.booleans(), min_size=20, max_size=20)),
 )
-# issue 29: a group re-formed smaller renumbered the other group's targets, and a robot of that
-# group not yet sent off went for an index past the end (two-squares.toml, seed 5, optimal)
-@example(bits=[True] * 20, spare=0, seed=0, events=[(0, "remove", 1, None)], rate=0.0,
-         second=[True] * 20)  # fmt: skip
-# hypothesis found both: local-swap robots kept goals under robots stalled at step 32, and one
-# waited beside its goal for ever, the other traded it into the formed shape
-@example(bits=STALLED_ON_A_GOAL[0], spare=-2, seed=579, events=[(32, "stall", 0.3391, None)],
-         rate=0.0, second=None)  # fmt: skip
-@example(bits=STALLED_ON_A_GOAL[1], spare=-2, seed=0, events=[(32, "stall", 0.3391, None)],
-         rate=0.0, second=None)  # fmt: skip
-# hypothesis found it: a stall on the one cell left after removals at step 0 left no copy to
-# re-form at the seeds, so the run never formed nor ended stranded
-@example(
-    bits=[bit == "#" for bit in "#..#...#..#.#..#.#.#"],
-    spare=-3,
-    seed=946,
-    events=[(120, "stall", 0.39587348908824527, None), (0, "remove", 0.08094609668464764, None),
-            (0, "remove", 0.5900099683931079, None)],
-    rate=0.0,
-    second=None,
-)  # fmt: skip
-# hypothesis found it: the shape formed the step 4 robots stalled, and one coasting on the step
-# after stopped walling off a cell, which opened it again
-@example(
-    bits=[bit == "#" for bit in "#.##.#....#.#.####.."],
-    spare=-1,
-    seed=150,
-    events=[(0, "remove", 0.05, None), (157, "stall", 4, (6, 0, 5, 5))],
-    rate=0.0,
-    second=None,
-)
 def test_invariants_hold_through_random_faults(strategy, bits, spare, seed, events, rate, second):
     """Random fault events and failure rates, on one group or two: no overlaps, robots
     conserved except those removed, settled robots stay, the same run per seed, and every shape
-    heals or rescales. (A third of the plain test's examples: each runs up to 2,500 steps
-    twice.)"""
+    heals or rescales. (A third of the plain test's share with `--slow`: each example runs up
+    to 2,500 steps twice.)"""
+    hold_through_faults(strategy, bits, spare, seed, events, rate, second)
+
+
+STALLED_ON_A_GOAL = [
+    [bit == "#" for bit in "##.#.#.###...##.#.#."],
+    [bit == "#" for bit in "##...#.###...##.#.#."],
+]
+FAULT_CASES = {
+    # issue 29: a group re-formed smaller renumbered the other group's targets, and a robot of
+    # that group not yet sent off went for an index past the end (two-squares.toml, seed 5,
+    # optimal)
+    "another-group-re-formed-smaller": dict(
+        bits=[True] * 20, spare=0, seed=0, events=[(0, "remove", 1, None)], rate=0.0,
+        second=[True] * 20,
+    ),
+    # hypothesis found both: local-swap robots kept goals under robots stalled at step 32, and
+    # one waited beside its goal for ever, the other traded it into the formed shape
+    "a-goal-under-a-stalled-robot": dict(
+        bits=STALLED_ON_A_GOAL[0], spare=-2, seed=579, events=[(32, "stall", 0.3391, None)],
+        rate=0.0, second=None,
+    ),
+    "a-goal-traded-into-the-formed-shape": dict(
+        bits=STALLED_ON_A_GOAL[1], spare=-2, seed=0, events=[(32, "stall", 0.3391, None)],
+        rate=0.0, second=None,
+    ),
+    # hypothesis found it: a stall on the one cell left after removals at step 0 left no copy
+    # to re-form at the seeds, so the run never formed nor ended stranded
+    "no-copy-left-at-the-seeds": dict(
+        bits=[bit == "#" for bit in "#..#...#..#.#..#.#.#"], spare=-3, seed=946,
+        events=[(120, "stall", 0.39587348908824527, None),
+                (0, "remove", 0.08094609668464764, None),
+                (0, "remove", 0.5900099683931079, None)],
+        rate=0.0, second=None,
+    ),
+    # hypothesis found it: the shape formed the step 4 robots stalled, and one coasting on the
+    # step after stopped walling off a cell, which opened it again
+    "a-stalled-robot-coasting-on": dict(
+        bits=[bit == "#" for bit in "#.##.#....#.#.####.."], spare=-1, seed=150,
+        events=[(0, "remove", 0.05, None), (157, "stall", 4, (6, 0, 5, 5))], rate=0.0,
+        second=None,
+    ),
+}  # fmt: skip
+"""Examples that broke the fault property once, under some strategy; each is run under every
+strategy (by default each under one of them, `each_choice`)."""
+
+
+@pytest.mark.parametrize(
+    ("strategy", "case"), each_choice(itertools.product(STRATEGIES, FAULT_CASES))
+)
+def test_fault_runs_that_once_broke_an_invariant(strategy, case):
+    hold_through_faults(strategy, **FAULT_CASES[case])
+
+
+def hold_through_faults(strategy, bits, spare, seed, events, rate, second):
     specs = []
     for name, picture in (("g", bits), ("h", second)):
         if picture is None:

@@ -36,7 +36,7 @@ from swarmshape.strategies.mean_shift import IN_PLACE, MESSAGE, OUTSIDE, MeanShi
 from swarmshape.strategies.skills import relay
 from swarmshape.strategies.skills import shape as skills
 from swarmshape.strategies.skills.localise import localise
-from tests.conftest import SHAPES, grid_from, make_swarm, world_of
+from tests.conftest import SHAPES, each_choice, grid_from, make_swarm, world_of
 
 
 def formed(shape: str, max_steps: int = 3000, **settings):
@@ -44,9 +44,13 @@ def formed(shape: str, max_steps: int = 3000, **settings):
     return run(build(config), max_steps=max_steps)
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize(
-    ("shape", "cells"), [("star.png", 12), ("ring.png", 10), ("horseshoe.png", None)]
+    ("shape", "cells", "seed"),
+    each_choice(
+        (*shape, seed)
+        for shape in [("star.png", 12), ("ring.png", 10), ("horseshoe.png", None)]
+        for seed in [0, 1, 2]
+    ),
 )
 def test_small_shapes_with_arms_and_holes_form_whole_without_overlaps(shape, cells, seed):
     swarm = formed(shape, cells=cells, seed=seed)

@@ -21,7 +21,7 @@ from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import create
 from swarmshape.strategies.self_assembly import JOINED, WAIT, WANDER, SelfAssembly
-from tests.conftest import SHAPES, grid_from
+from tests.conftest import SHAPES, each_choice, grid_from
 
 
 def formed(shape: str, **options):
@@ -29,9 +29,14 @@ def formed(shape: str, **options):
     return run(build(config), max_steps=20_000)
 
 
-@pytest.mark.parametrize("start", ["packed", "scatter"])
-@pytest.mark.parametrize(("shape", "cells"), [("small-square.png", None), ("horseshoe.png", None),
-                                              ("letter-k.png", 12)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("shape", "cells", "start"),
+    each_choice(
+        (*shape, start)
+        for shape in [("small-square.png", None), ("horseshoe.png", None), ("letter-k.png", 12)]
+        for start in ["packed", "scatter"]
+    ),
+)
 def test_small_hole_free_shapes_form_without_overlaps(shape, cells, start):
     swarm = formed(shape, cells=cells, start=start, seed=2)
     metrics = run_metrics(swarm)
