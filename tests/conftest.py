@@ -42,6 +42,7 @@ settings.load_profile(os.environ.get("SWARMSHAPE_HYPOTHESIS_PROFILE", "quick"))
 WHOLE_RUN_EXAMPLES = 10
 """Examples by default of a property each of whose examples is a whole run or two (in all, over
 its parametrised cases): `--slow` gives it the profile's thousand."""
+_slow = False
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -54,8 +55,8 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "slow: runs only with --slow (large swarms, long runs)")
     if config.getoption("--slow"):
         settings.load_profile("slow")
-        global WHOLE_RUN_EXAMPLES
-        WHOLE_RUN_EXAMPLES = settings().max_examples
+        global _slow
+        _slow = True
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
@@ -80,8 +81,8 @@ def slow_for(slow: str, param: str) -> object:
 
 def whole_runs(cases: int = 1) -> int:
     """`max_examples` for each of the `cases` of a property whose examples are whole runs: its
-    share of `WHOLE_RUN_EXAMPLES`, at least one."""
-    return max(1, WHOLE_RUN_EXAMPLES // cases)
+    share of `WHOLE_RUN_EXAMPLES` (of the profile's examples with `--slow`), at least one."""
+    return max(1, (settings().max_examples if _slow else WHOLE_RUN_EXAMPLES) // cases)
 
 
 def each_choice(cases: Iterable[Sequence[object]]) -> list[object]:

@@ -23,7 +23,7 @@ from swarmshape.cli import settings_table
 from swarmshape.config import RunConfig, configure
 from swarmshape.experiments.sweep import read_sweep
 from swarmshape.ui.viewer import Viewer
-from tests.conftest import script
+from tests.conftest import WHOLE_RUN_EXAMPLES, script
 
 ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
@@ -358,6 +358,8 @@ def test_the_suite_runs_as_many_examples_a_property_as_the_readme_says():
     quick = re.search(r"(\d+) examples a property", README)
     assert quick and settings.get_profile("quick").max_examples == int(quick.group(1))
     assert "a thousand examples each" in README
+    whole_runs = re.search(r"(\d+) in all for a property each of whose examples", README)
+    assert whole_runs and int(whole_runs.group(1)) == WHOLE_RUN_EXAMPLES
     assert settings.get_profile("slow").max_examples == 1000
 
 
