@@ -52,11 +52,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    global _slow
     config.addinivalue_line("markers", "slow: runs only with --slow (large swarms, long runs)")
-    if config.getoption("--slow"):
+    _slow = config.getoption("--slow")
+    if _slow:
         settings.load_profile("slow")
-        global _slow
-        _slow = True
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

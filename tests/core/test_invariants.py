@@ -94,8 +94,8 @@ def test_invariants_hold_at_every_step(strategy, bits, spare, room, seed):
 def test_invariants_hold_through_random_faults(strategy, bits, spare, seed, events, rate, second):
     """Random fault events and failure rates, on one group or two: no overlaps, robots
     conserved except those removed, settled robots stay, the same run per seed, and every shape
-    heals or rescales. (A third of the plain test's share with `--slow`: each example runs up
-    to 2,500 steps twice.)"""
+    heals or rescales. (With `--slow`, a third of the plain test's examples: each runs up to
+    2,500 steps twice.)"""
     hold_through_faults(strategy, bits, spare, seed, events, rate, second)
 
 
@@ -150,6 +150,7 @@ def test_fault_runs_that_once_broke_an_invariant(strategy, case):
 
 
 def hold_through_faults(strategy, bits, spare, seed, events, rate, second):
+    """Two runs of one case of the fault property, watched at every step."""
     specs = []
     for name, picture in (("g", bits), ("h", second)):
         if picture is None:
