@@ -1,0 +1,19 @@
+"""The suite's own tiers: what the default run keeps of a matrix of cases."""
+
+from __future__ import annotations
+
+import itertools
+
+from tests.conftest import each_choice
+
+
+def test_each_choice_keeps_every_value_of_every_argument_and_marks_the_rest_slow():
+    cases = list(itertools.product("abc", range(4), [True, False]))
+    params = each_choice(cases)
+    assert [param.values for param in params] == cases
+    kept = [param.values for param in params if not param.marks]
+    for axis in range(3):
+        assert {case[axis] for case in kept} == {case[axis] for case in cases}
+    assert len(kept) == 4, "as few as the longest argument allows"
+    assert {mark.name for param in params for mark in param.marks} == {"slow"}
+    assert [param.marks for param in each_choice(cases)] == [param.marks for param in params]
