@@ -85,14 +85,17 @@ def whole_runs(cases: int = 1) -> int:
     return max(1, (settings().max_examples if _slow else WHOLE_RUN_EXAMPLES) // cases)
 
 
-def each_choice(cases: Iterable[Sequence[object]]) -> list[object]:
+def each_choice(
+    cases: Iterable[Sequence[object]], keep: Iterable[Sequence[object]] = ()
+) -> list[object]:
     """The `cases` of a parametrised test (one value per argument each), those beyond a few
-    marked slow: the default run keeps a handful in which every value of every argument
-    appears at least once (each-choice coverage, chosen greedily and so the same every run,
-    which pairs the arguments' values off much as a diagonal would); `--slow` runs them all."""
+    marked slow: the default run keeps the cases in `keep` (a regression under the strategy
+    it broke, say) and a handful more in which every value of every argument appears at least
+    once (each-choice coverage, chosen greedily and so the same every run, which pairs the
+    arguments' values off much as a diagonal would); `--slow` runs them all."""
     cases = [tuple(case) for case in cases]
-    covered: set[tuple[int, object]] = set()
-    kept: set[int] = set()
+    kept = {cases.index(tuple(case)) for case in keep}
+    covered = {choice for index in kept for choice in enumerate(cases[index])}
     while True:
         new = [len(set(enumerate(case)) - covered) for case in cases]
         best = max(range(len(cases)), key=new.__getitem__)

@@ -76,7 +76,6 @@ class InvariantWatch(Observer):
         self._settled: np.ndarray | None = None
         self._formed = False
         self._faults = 0
-        self._dead: np.ndarray | None = None
         self.failed = False
         """The run stopped short (see `fail`)."""
         self._step = -1
@@ -109,10 +108,8 @@ class InvariantWatch(Observer):
                 f"step {step}: {len(pos)} robots where there were {swarm.world.agents} "
                 f"and faults removed {removed}"
             )
-        if len(swarm.faults.log) != self._faults or not np.array_equal(swarm.dead, self._dead):
-            # a fault may open cells of a formed shape, and so may stalled robots coasting on
-            # after it and no longer walling off a cell they did a step before
-            self._faults, self._dead, self._formed = len(swarm.faults.log), swarm.dead.copy(), False
+        if len(swarm.faults.log) != self._faults:  # a fault may open cells of a formed shape
+            self._faults, self._formed = len(swarm.faults.log), False
         if self._settled is not None:
             still = self._settled & (swarm.state == SETTLED)
             moved = np.flatnonzero(still & (swarm.cell != self._cells).any(axis=1))

@@ -422,7 +422,7 @@ class Swarm:
         (re-forming leaves that only when every robot that can move stands on another group's
         shape, where a live change to that shape may have put it)."""
         able = ((self.state != LOST) & (self.state != STALLED)) | (self.ahead > 0)
-        walls_set = self.faults.rate == 0 and not (self.ahead[self.state == STALLED] > 0).any()
+        walls_set = self.faults.rate == 0 and self._walls_still()
         groups = range(len(self.world.groups))
         done = [
             self._whole(g)
@@ -722,14 +722,16 @@ class Swarm:
         return None
 
     def _whole(self, group: int) -> bool:
-        """Every target of `group` is filled or lost to stalled robots (see `dead`), and not
-        every one is lost: a shape left with no cell to fill is not formed. A shape that keeps
-        its size when faults leave it short of robots (`Params.on_loss`) is formed as far as
-        it can be once every robot of it that can still move rests on one of its targets: the
-        cells left open wait for nobody."""
+        """Every target of `group` is filled or lost to stalled robots (see `dead`) that have
+        come to rest, and not every one is lost: a shape left with no cell to fill is not
+        formed. A shape that keeps its size when faults leave it short of robots
+        (`Params.on_loss`) is formed as far as it can be once every robot of it that can still
+        move rests on one of its targets: the cells left open wait for nobody."""
         mine = self.world.target_group == group
         filled, dead = self.filled[mine], self.dead[mine]
         if (filled | dead).all():
+            if dead.any() and not self._walls_still():
+                return False  # a stalled robot still coasting may yet open a cell it cuts off
             return bool(filled.any()) or not dead.any()
         if self.params.on_loss != "keep" or not self.faults.log or not filled.any():
             return False  # only a fault (each one logged) leaves a group short of robots
@@ -765,6 +767,11 @@ class Swarm:
         reached[labels[cells[:, 0], cells[:, 1]]] = True
         reached[0] = False  # the walls
         return reached[labels]
+
+    def _walls_still(self) -> bool:
+        """No stalled robot is still coasting to its stop: the walls that decide `dead` are
+        where they will stay (until another fault)."""
+        return not (self.ahead[self.state == STALLED] > 0).any()
 
     def _mobile(self) -> np.ndarray:
         """Per robot, whether it can still move (neither lost nor stalled)."""
