@@ -8,13 +8,14 @@ import time
 import numpy as np
 import pytest
 
-from swarmshape.check import StepTooLong, _time_limit, check_strategy
+from swarmshape.check import StepTooLong, _time_limit, check_strategy, watch_run
 from swarmshape.cli import main
 from swarmshape.core import compiled
+from swarmshape.core.local import QUIET, Program
 from swarmshape.core.steering import Strategy
 from swarmshape.strategies import available
 from swarmshape.strategies.concurrent import Optimal
-from tests.conftest import SHAPES
+from tests.conftest import SHAPES, grid_from, world_of
 
 
 class UsesGlobalRandom(Strategy):
@@ -50,6 +51,23 @@ def test_randomness_from_outside_the_run_is_reported():
 def test_a_shape_that_never_forms_is_reported():
     report = check_strategy(NeverStarts, runs=1, max_steps=200)
     assert report.problems[0].endswith("not formed after 200 steps (coverage 0%)")
+
+
+class StandsStill(Program):
+    name = "stands-still"
+    description = "never moves: the run comes to rest unformed"
+
+    def act(self, sense, memory, rng):
+        return np.zeros(len(sense), dtype=np.int64), np.zeros((len(sense), 0), dtype=np.int64)
+
+
+def test_a_run_that_ends_unformed_says_when_and_how_unless_it_need_not_form():
+    world = world_of(grid_from("###"))
+    (problem,) = watch_run(world, StandsStill, 0, max_steps=10 * QUIET).problems
+    assert problem == f"ended unformed at step {QUIET}, at rest (coverage 0%)"
+    assert watch_run(world, StandsStill, 0, max_steps=10 * QUIET, must_form=False).problems == []
+    (problem,) = watch_run(world, StandsStill, 0, max_steps=QUIET // 2, must_form=False).problems
+    assert problem == f"not formed after {QUIET // 2} steps (coverage 0%)", "it must end, though"
 
 
 def test_the_command_reports_and_sets_its_exit_status(capsys):

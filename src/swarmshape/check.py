@@ -205,11 +205,13 @@ def watch_run(
     resume_at: int | None = None,
     params: Params | None = None,
     faults: Faults | None = None,
+    must_form: bool = True,
 ) -> InvariantWatch:
     """Run one strategy on `world` to the end under an `InvariantWatch`, each step (and the
     making of the swarm) within `step_seconds`, saved to a file and resumed after step
     `resume_at` if given; with the run's `params` (its senses' noise, say) and `faults` if
-    given."""
+    given. A run that ends unformed (stranded, or at rest) is a problem if it `must_form`; one
+    that runs out of steps always is: it never ends."""
     watch = InvariantWatch()
     runner: Runner | None = None
     try:
@@ -225,10 +227,13 @@ def watch_run(
                     runner = Runner(resumed, [watch], max_steps)
             swarm = runner.swarm
             runner.close()
-            if not swarm.complete:
-                coverage = swarm.filled.mean()
+            coverage = f"coverage {swarm.filled.mean():.0%}"
+            if not swarm.complete and runner.out_of_steps:
+                watch.problems.append(f"not formed after {max_steps} steps ({coverage})")
+            elif not swarm.complete and must_form:
+                why = "stranded" if swarm.stranded else "at rest"
                 watch.problems.append(
-                    f"not formed after {max_steps} steps (coverage {coverage:.0%})"
+                    f"ended unformed at step {swarm.step_count}, {why} ({coverage})"
                 )
             for _ in range(AFTER_FORMED):
                 limited(runner.step)
