@@ -114,3 +114,25 @@ def test_mp4_without_the_video_extra_is_one_line_before_the_run(tmp_path, monkey
     lines = captured.err.strip().splitlines()
     assert len(lines) == 1 and "pip install 'swarmshape[video]'" in lines[0], lines
     assert captured.out == "" and not out.exists(), "refused before anything ran"
+
+
+def test_an_mp4_that_ffmpeg_fails_to_write_is_one_line_and_keeps_the_old_file(
+    tmp_path, monkeypatch, capfd
+):
+    """On a full disk ffmpeg stopped at the header or the trailer: imageio-ffmpeg's writer did
+    not notice, and a truncated file replaced the user's. Here ffmpeg fails as surely, on an
+    option it refuses."""
+    from swarmshape.cli import main
+    from swarmshape.ui import record
+
+    out = tmp_path / "run.mp4"
+    out.write_bytes(b"the user's video")
+    monkeypatch.setattr(record, "VIDEO", ("-crf", "not-a-number"))
+    command = [str(SHAPES / "line.png"), "--headless", "--seed", "1", "--record", str(out)]
+    assert main([*command, "--force"]) == 2
+    captured = capfd.readouterr()
+    (line,) = captured.err.strip().splitlines()
+    assert line.startswith(f"swarmshape: error: {out}: cannot write it (ffmpeg: "), line
+    assert "[" not in line, "ffmpeg's source tag dropped"
+    assert out.read_bytes() == b"the user's video"
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["run.mp4"], "no temporary left"

@@ -11,6 +11,9 @@ encoded as H.264 by the ffmpeg that the ``video`` extra's imageio-ffmpeg wheel s
 from __future__ import annotations
 
 import os
+import re
+import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -121,27 +124,41 @@ class Recorder(Observer):
 
     def _video(self, path: str) -> None:
         """The frames as an H.264 MP4 at the animations' pace, each padded to even sides
-        (which H.264's colour format needs) by repeating its last row and column."""
+        (which H.264's colour format needs) by repeating its last row and column. ffmpeg runs
+        here rather than through imageio-ffmpeg's writer, which neither reads ffmpeg's exit
+        status nor keeps its messages off the terminal: on a full disk it kept a truncated
+        file, with ffmpeg's lines on stderr."""
         width, height = self.size
         even = (width + width % 2, height + height % 2)
-        writer = _encoder(self.animation).write_frames(
-            path,
-            even,
-            fps=1000 / FRAME_MS,
-            codec="libx264",
-            quality=None,
-            macro_block_size=2,
-            ffmpeg_log_level="error",
-            output_params=list(VIDEO),
-        )
-        writer.send(None)  # starts ffmpeg
-        try:
-            for image in self._images:
-                pixels = np.asarray(image.convert("RGB"))
-                padding = ((0, even[1] - height), (0, even[0] - width), (0, 0))
-                writer.send(np.ascontiguousarray(np.pad(pixels, padding, mode="edge")))
-        finally:
-            writer.close()
+        command = [
+            _encoder(self.animation).get_ffmpeg_exe(), "-y", "-v", "error",
+            "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{even[0]}x{even[1]}",
+            "-r", f"{1000 / FRAME_MS:g}", "-i", "-", "-an",
+            "-vcodec", "libx264", "-pix_fmt", "yuv420p", *VIDEO, path,
+        ]  # fmt: skip
+        with tempfile.TemporaryFile() as said:
+            ffmpeg = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=said)
+            assert ffmpeg.stdin is not None
+            try:
+                for image in self._images:
+                    pixels = np.asarray(image.convert("RGB"))
+                    padding = ((0, even[1] - height), (0, even[0] - width), (0, 0))
+                    ffmpeg.stdin.write(np.pad(pixels, padding, mode="edge").tobytes())
+                ffmpeg.stdin.close()
+            except BrokenPipeError:  # ffmpeg stopped: what it said tells why
+                pass
+            except BaseException:
+                ffmpeg.kill()
+                raise
+            finally:
+                status = ffmpeg.wait()
+            if status != 0:
+                said.seek(0)
+                lines = said.read().decode(errors="replace").strip().splitlines() or [
+                    f"exit status {status}"
+                ]
+                # the first line says why; its tags name ffmpeg's parts ("[libx264 @ 0x55...]")
+                raise OSError("ffmpeg: " + re.sub(r"^(\[[^]]*\] *)+", "", lines[0]))
 
 
 def _encoder(path: Path):
