@@ -14,7 +14,7 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -73,14 +73,20 @@ class Outputs:
     positions_every: int = 1
     force: bool = False
 
-    def check(self, inputs: Mapping[Path, str] | None = None, resumed: Path | None = None) -> None:
+    def check(
+        self,
+        inputs: Mapping[Path, str] | None = None,
+        resumed: Path | None = None,
+        others: Sequence[tuple[str, Path]] = (),
+    ) -> None:
         """Fail before the run, not after it, when an output cannot be written, would replace
-        one of the run's `inputs` (path: what it is to the run), or would replace a file the
+        one of the run's `inputs` (path: what it is to the run), would replace a file the
         user did not ask to replace (`force`; `--save-state` may replace the state `resumed`,
-        which is one of the inputs: the run goes on where it was saved)."""
+        which is one of the inputs: the run goes on where it was saved), or names a file the
+        session writes `others`-wise (what writes it, path): the editor's drawing, say."""
         named = [(f"--{o.replace('_', '-')}", getattr(self, o)) for o in OUTPUT_OPTIONS]
         named = [(flag, path) for flag, path in named if path is not None]
-        distinct_outputs(named)
+        distinct_outputs([*others, *named])
         for flag, path in named:
             continues = flag == "--save-state" and resumed is not None and _same(path, resumed)
             check_output(
@@ -135,7 +141,11 @@ class Session:
     def start(self) -> dict[str, Any] | None:
         """Run it, write its outputs, print its summary; return its metrics (None when the
         editor closed before any swarm ran)."""
-        self.outputs.check(self._inputs(), self.resume)
+        drawing = self.config.shape if self.editing and self.resume is None else None
+        # the drawing may not exist yet, so it is no input to keep, but Ctrl+S writes it
+        self.outputs.check(
+            self._inputs(), self.resume, [("the editor's Ctrl+S", drawing)] if drawing else []
+        )
         with self._loading():
             config, world, prepared = self._prepare()
 

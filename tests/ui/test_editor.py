@@ -472,3 +472,24 @@ def test_a_new_file_not_named_png_is_offered_a_png_name(tmp_path):
     key(view, pygame.K_RETURN)
     assert load_grid(tmp_path / "new.png").sum() == 5 and not (tmp_path / "new.jpg").exists()
     pygame.quit()
+
+
+@pytest.mark.parametrize("flag", ["--save-state", "--record", "--trace"])
+def test_an_output_that_names_the_drawing_is_refused_before_the_window_opens(
+    tmp_path, capsys, monkeypatch, flag
+):
+    """A new drawing is no file yet, so no input to keep; but Ctrl+S writes it, and the
+    output written at quit replaced it (a drawing became a state file, with no --force)."""
+    from swarmshape.cli import main
+    from swarmshape.ui import viewer
+
+    def opened(*_, **__):
+        raise AssertionError("the window opened")  # and would wait for a person for good
+
+    monkeypatch.setattr(viewer, "Viewer", opened)
+
+    drawing = tmp_path / "new.png"
+    assert main(["edit", str(drawing), flag, str(tmp_path / "." / "new.png")]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.endswith(f"the editor's Ctrl+S and {flag} both write it; name two files")
+    assert not drawing.exists()
