@@ -128,6 +128,9 @@ def test_the_file_options_of_another_strategy_are_dropped_with_a_word():
         (["--set", "order"], "expected NAME=VALUE"),
         (["--order", "random"], "--order is an option of paper: give it as --set order=VALUE"),
         (["--max-speed", "nan"], "--max-speed: must be a number from 0.001 to 1, got 'nan'"),
+        # past 64 bits, numpy refused it mid-run: an internal error (`options.LARGEST`)
+        (["--strategy", "self-assembly", "--set", f"patience={2**64}"], "at most 9,223,372,"),
+        (["--strategy", "mean-shift", "--set", "lap_pace=1e18"], "lap_pace must be a number f"),
     ],
 )
 def test_bad_options_on_the_command_line_are_one_line_and_exit_2(capsys, args, message):

@@ -45,9 +45,16 @@ class Kind:
     """How a command line's help shows a value of this kind."""
 
 
+LARGEST = 2**63 - 1
+"""The largest whole number a setting takes: robots' memory and messages are 64-bit integers,
+and numpy refuses a larger one in a comparison with them (an `OverflowError` mid-run)."""
+
+
 def _integer(value: Any) -> int:
     if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer):
         raise ValueError
+    if not -LARGEST - 1 <= value <= LARGEST:
+        raise OverflowError
     return int(value)
 
 
@@ -130,7 +137,10 @@ class Spec:
             value = self.kind.coerce(value)
         except InputError:  # a kind that says itself what is wrong (a list of fault events)
             raise
-        except (ValueError, TypeError, OverflowError):
+        except OverflowError:
+            fits = f"{self.describe()}, at most {LARGEST:,}"
+            raise self.error(f"must be {fits}, got {_shown(value)}") from None
+        except (ValueError, TypeError):
             raise self.error(f"must be {self.describe()}, got {_shown(value)}") from None
         if not self.allows(value):
             raise self.error(f"must be {self.describe()}, got {_shown(value)}")

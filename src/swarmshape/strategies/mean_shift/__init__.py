@@ -74,7 +74,7 @@ from typing import ClassVar
 import numpy as np
 
 from swarmshape.core.local import Memory, Program, Schema, Slot
-from swarmshape.core.motion import STEPS
+from swarmshape.core.motion import SLOWEST, STEPS
 from swarmshape.core.options import option
 from swarmshape.core.perception import Perception
 from swarmshape.strategies import register, routes
@@ -155,6 +155,7 @@ class MeanShift(Program):
             "step): news of an empty rim cell lives, and a robot follows it, for as long as a "
             "lap of the shape's rim takes at that pace",
             at_least=0.0,
+            at_most=1 / SLOWEST,  # a thousand steps a cell: the slowest a robot can be made
         )
         patience: int = option(
             5,
