@@ -322,3 +322,12 @@ def test_every_shipped_picture_loads_at_a_size_that_keeps_it(shapes):
             assert grid.shape == picture.ink.shape, path.name
         else:
             assert chosen_cells(picture) >= DEFAULT_CELLS, path.name
+
+
+@pytest.mark.parametrize("threshold", [0.0, 1.0])
+def test_the_thresholds_at_the_ends_of_the_range_the_setting_allows_are_read(threshold):
+    """The setting takes 0 to 1; the reader refused both ends ("must be between 0 and 1")."""
+    from swarmshape.config import RunConfig, bundled_shapes
+
+    assert RunConfig(threshold=threshold).threshold == threshold
+    assert load_grid(bundled_shapes() / "line.png", threshold=threshold).any()

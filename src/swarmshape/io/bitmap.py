@@ -103,8 +103,8 @@ def read_picture(
 ) -> Picture:
     """The image's ink, or one line saying why there is none to read."""
     path = Path(path)
-    if not 0.0 < threshold < 1.0:
-        raise BitmapError(f"--threshold must be between 0 and 1, got {threshold}")
+    if not 0.0 <= threshold <= 1.0:  # as the setting says (`RunConfig.threshold`)
+        raise BitmapError(f"--threshold must be from 0 to 1, got {threshold}")
     rgba, one_cell_per_pixel = _open_rgba(path)
     ink, near = ink_of(rgba, threshold=threshold, invert=invert)
     del rgba  # the ink is what is kept
