@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import tomllib
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,12 @@ def registered_strategy(name: str) -> None:
     if strategies.is_code(name):
         raise InputError(f"strategy {name!r} points at code; name a registered or installed one")
     strategies.get(name)
+
+
+def one_per_world(names: Iterable[str]) -> list[str]:
+    """One of the strategies `names` for each kind of world they have `load_world` build: one
+    that grows from its seeds gets the shape's solid part, the others the shape as drawn."""
+    return list({strategies.get(name).grows_from_seeds: name for name in names}.values())
 
 
 def load_world(config: RunConfig, picture: Picture | None = None) -> World:

@@ -102,6 +102,13 @@ def test_the_command_line_sweeps_and_plots(tiny, tmp_path, capsys):
         (TINY + "speed = 3\n", "unknown key 'speed'"),
         (TINY.replace("seeds = 2", "seeds = 'two'"), "seeds must be"),
         ("shapes = [", "not valid TOML"),
+        # checked by shape, cells and robots alone, these ended a sweep after the runs before
+        (TINY + "arena = [[40, 24], [3, 3]]\n", "outside the 3x3 arena"),
+        (
+            TINY.replace('"greedy"', '"self-assembly"').replace('"optimal", ', "")
+            + "options.patience = [1, 99999999999999999999]\n",
+            "at most 9,223,372,",
+        ),
     ],
 )
 def test_bad_sweep_files_say_what_is_wrong(tmp_path, text, message):

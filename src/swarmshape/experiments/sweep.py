@@ -41,7 +41,15 @@ from swarmshape.errors import InputError
 from swarmshape.experiments.progress import ProgressBar
 from swarmshape.experiments.results import open_results
 from swarmshape.io.files import read_toml
-from swarmshape.runs import Observer, build, files_read, load_world, registered_strategy, run
+from swarmshape.runs import (
+    Observer,
+    build,
+    files_read,
+    load_world,
+    one_per_world,
+    registered_strategy,
+    run,
+)
 
 SEEDS = "a count of at least 1, or a list of seeds from 0 to 2**63 - 1"
 OWN_KEYS = {
@@ -188,9 +196,16 @@ def _seeds(path: Path, seeds: Any) -> Sequence[int]:
     return range(seeds)
 
 
+WORLD_KEYS = ("shape", "cells", "agents", "threshold", "invert", "fit", "arena", "start")
+"""The sweep keys that decide a run's world (`load_world` reads them), with the strategy."""
+
+
 def _check_runs(path: Path, values: dict[str, list]) -> None:
-    """What only a run's description or its shape can tell: strategies and their options,
-    speed limits, images, scenarios and robot counts (checked once per distinct combination)."""
+    """What only a run's description or its world can tell: strategies and their options,
+    speed limits, images, scenarios, robot counts and arenas (checked once per distinct
+    combination; a world built for one strategy of each kind, growing from its seeds or not).
+    Checked for shapes, cells and robots alone, an arena too small for one shape ended a
+    sweep after the runs before it."""
     options = [name for name in values if name.startswith(OPTION)]
     try:
         for strategy in values["strategy"]:
@@ -205,11 +220,12 @@ def _check_runs(path: Path, values: dict[str, list]) -> None:
             values.get("max_accel", [RunConfig.max_accel]),
         ):
             RunConfig(max_speed=speed, max_accel=accel)
-        base = path.parent
-        for shape, cells, agents in itertools.product(
-            values["shape"], values["cells"], values["agents"]
-        ):
-            load_world(configure(base / shape, agents=agents or None, cells=cells))
+        keys = [key for key in WORLD_KEYS if key in values]
+        for strategy in one_per_world(values["strategy"]):
+            for combination in itertools.product(*(values[key] for key in keys)):
+                world = dict(zip(keys, combination, strict=True))
+                shape, agents = path.parent / world.pop("shape"), world.pop("agents") or None
+                load_world(configure(shape, strategy=strategy, agents=agents, **world))
     except InputError as error:
         raise InputError(f"{path}: {error}") from None
 
