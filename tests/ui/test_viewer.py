@@ -88,6 +88,23 @@ def test_f12_saves_a_png_of_the_window(viewer, tmp_path):
     assert image.get_size() == viewer.screen.get_size()
 
 
+def test_f12_never_replaces_a_file_and_a_folder_it_cannot_write_is_a_notice(viewer, tmp_path):
+    """The screenshot's name is the program's, not the user's: a file of that name stays, and a
+    failure to write (a full disk, a folder without permission) is a line in the window, not the
+    end of the run and of the outputs it was to write."""
+    viewer.tick()
+    viewer.paused = True
+    taken = tmp_path / f"swarmshape-bar-{viewer.swarm.step_count}.png"
+    taken.write_text("the user's notes")
+    press(viewer, pygame.K_F12)
+    assert taken.read_text() == "the user's notes"
+    assert viewer.notice == f"saved {taken.with_name(taken.stem + '-2.png')}"
+    viewer.screenshots = tmp_path / "no such folder"
+    press(viewer, pygame.K_F12)
+    assert viewer.notice.startswith("screenshot not saved: "), viewer.notice
+    assert viewer.running
+
+
 def resize(view: Viewer, size: tuple[int, int]) -> None:
     """What a person's drag of the window's edge does: SDL resizes the window (the dummy
     driver only does so through set_mode), then the window hears of it."""

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Sequence
+from itertools import count
 from math import ceil
 from pathlib import Path
 
@@ -31,7 +32,7 @@ from swarmshape.core.states import MOVING, SETTLED, WANDERING
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, World, build_world
 from swarmshape.errors import InputError
-from swarmshape.io.files import atomic_write
+from swarmshape.io.files import OutputError, atomic_write
 from swarmshape.runs import Observer, Runner
 from swarmshape.ui.editor import HELP_LINES, Canvas, Editor
 from swarmshape.ui.render import (
@@ -236,7 +237,10 @@ class Viewer:
             self.screen = pygame.display.get_surface()  # set_mode would make a new window
             self.font = font_of(self._font_size())
         elif event.type == pygame.KEYDOWN and event.key == pygame.K_F12:
-            self.notice = f"saved {self.screenshot()}"
+            try:
+                self.notice = f"saved {self.screenshot()}"
+            except OutputError as error:  # a screenshot is a side line: the run goes on
+                self.notice = f"screenshot not saved: {error}"
         elif self.editing:
             outcome = self.editor.handle(event, self.cell_at)
             if outcome == "apply":
@@ -411,10 +415,12 @@ class Viewer:
     # --- drawing ------------------------------------------------------------------------
 
     def screenshot(self) -> Path:
-        """Save the window as PNG (atomically) and return its path."""
+        """Save the window as PNG (atomically) under a name no file has yet (nobody named
+        it: it never replaces one), and return its path."""
         step = 0 if self.swarm is None else self.swarm.step_count
         stem = Path(self.title).stem.replace(" ", "-")
-        path = self.screenshots / f"swarmshape-{stem}-{step}.png"
+        names = (f"swarmshape-{stem}-{step}{'' if n == 1 else f'-{n}'}.png" for n in count(1))
+        path = next(path for name in names if not (path := self.screenshots / name).exists())
         atomic_write(path, lambda tmp: pygame.image.save(self.screen, tmp))
         print(f"screenshot: {path}")
         return path
