@@ -126,6 +126,28 @@ def test_atomic_write_keeps_the_old_file_when_writing_fails(tmp_path):
     assert path.read_text() == "precious" and list(tmp_path.iterdir()) == [path]
 
 
+def test_outputs_keep_the_mode_of_the_file_they_replace_and_new_ones_follow_the_umask(tmp_path):
+    """A private file replaced with --force stayed private no longer (0600 became 0644), and a
+    frames folder was private whatever the umask (mkdtemp's 0700)."""
+    private = tmp_path / "metrics.json"
+    private.write_text("{}")
+    private.chmod(0o600)
+    trace = tmp_path / "trace.csv"
+    trace.write_text("")
+    trace.chmod(0o640)
+    common = [str(SHAPES / "line.png"), "--headless", "--seed", "1", "--force"]
+    frames = tmp_path / "frames"
+    outputs = ["--metrics", str(private), "--trace", str(trace), "--frames", str(frames)]
+    assert main([*common, *outputs]) == 0
+    usual = 0o777 & ~files.umask()
+    assert [path.stat().st_mode & 0o777 for path in (private, trace, frames)] == [
+        0o600,
+        0o640,
+        usual,
+    ]
+    assert (next(frames.iterdir()).stat().st_mode & 0o777) == usual & 0o666
+
+
 def test_temporary_names_start_with_a_short_prefix(tmp_path):
     seen = []
     atomic_write(

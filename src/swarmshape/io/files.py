@@ -68,7 +68,8 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[str], object]) -
     os.close(fd)
     try:
         write(tmp)
-        os.chmod(tmp, 0o666 & ~umask())  # mkstemp makes it private; give it the usual mode
+        # mkstemp makes it private: the mode of the file it replaces, or else the usual one
+        os.chmod(tmp, _mode_of(path, 0o666 & ~umask()))
         os.replace(tmp, path)
     except OSError as error:
         Path(tmp).unlink(missing_ok=True)
@@ -94,7 +95,7 @@ class StreamedFile:
     def commit(self) -> None:
         try:
             self.handle.close()
-            os.chmod(self._tmp, 0o666 & ~umask())
+            os.chmod(self._tmp, _mode_of(self.path, 0o666 & ~umask()))
             os.replace(self._tmp, self.path)
         except OSError as error:
             self.discard()
@@ -131,6 +132,7 @@ class TemporaryFolder:
         run did not write (an earlier run's)."""
         try:
             if not self.target.exists():
+                os.chmod(self.path, 0o777 & ~umask())  # mkdtemp makes it private
                 os.replace(self.path, self.target)
                 return
             written = {path.name for path in self.path.iterdir()}
@@ -250,6 +252,14 @@ def distinct_outputs(outputs: Iterable[tuple[str, Path]]) -> None:
         if key in seen:
             raise OutputError(f"{path}: {seen[key]} and {flag} both write it; name two files")
         seen[key] = flag
+
+
+def _mode_of(path: Path, otherwise: int) -> int:
+    """The permission bits of the file at `path`, or `otherwise` if there is none."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        return otherwise
 
 
 def umask() -> int:
