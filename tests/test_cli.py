@@ -87,6 +87,10 @@ def bad_inputs(tmp_path):
         "malformed toml": ([str(tmp_path / "bad.toml")], "not valid TOML"),
         "unknown key": ([str(tmp_path / "typo.toml")], "unknown key 'shap'"),
         "unknown strategy": ([str(SHAPES / "line.png"), "--strategy", "nope"], "unknown strategy"),
+        "no speed": (  # nan, 0 and -1 were taken as the slowest speed
+            [str(SHAPES / "line.png"), "--speed", "nan"],
+            "--speed: steps per frame must be a number above 0, got 'nan'",
+        ),
     }
 
 
@@ -101,6 +105,7 @@ def bad_inputs(tmp_path):
         "malformed toml",
         "unknown key",
         "unknown strategy",
+        "no speed",
     ],
 )
 def test_bad_input_is_one_line_on_stderr_and_exit_code_2(tmp_path, case):

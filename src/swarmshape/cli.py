@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import ctypes.util
+import math
 import os
 import sys
 import tempfile
@@ -198,7 +199,7 @@ def _shared_options() -> argparse.ArgumentParser:
         help="print the shape as text beside its picture and stop (no run)",
     )
     sim = groups["simulation"]
-    sim.add_argument("--speed", type=float, default=8, help="window: steps per frame (default 8)")
+    sim.add_argument("--speed", type=_speed, default=8, help="window: steps per frame (default 8)")
     sim.add_argument(
         "--load-state", type=Path, help="resume a run saved with --save-state (PATH not needed)"
     )
@@ -309,6 +310,17 @@ def _size(text: str) -> tuple[int, int]:
             f"expected WIDTHxHEIGHT, e.g. 60x40, got {text!r}"
         ) from None
     return width, height
+
+
+def _speed(text: str) -> float:
+    """Steps per frame: any number above 0 (the window takes the nearest of its speeds)."""
+    try:
+        speed = float(text)
+    except ValueError:
+        speed = math.nan
+    if not 0 < speed < math.inf:
+        raise argparse.ArgumentTypeError(f"steps per frame must be a number above 0, got {text!r}")
+    return speed
 
 
 def _version() -> str:
@@ -474,7 +486,9 @@ def _nothing_that_a_resume_ignores(args: argparse.Namespace, given: dict) -> Non
     ignored = [name for name, value in given.items() if value is not None]
     ignored = [name for name in ignored if name not in ("max_steps", "strategy")]
     if ignored:
-        flag = "--set" if ignored[0] == "options" else "--" + ignored[0].replace("_", "-")
+        # the fault events come from --fail, --stall and --fail-region
+        flags = {"options": "--set", "faults": "--fail, --stall or --fail-region"}
+        flag = flags.get(ignored[0], "--" + ignored[0].replace("_", "-"))
         raise InputError(f"--load-state resumes a saved run as it was; {flag} cannot change it")
 
 

@@ -222,6 +222,7 @@ def test_a_run_saved_with_code_resumes_only_when_that_code_is_named_again(tmp_pa
     [
         (["--seed", "3"], "--seed cannot change it"),
         (["--agents", "9"], "--agents cannot change it"),
+        (["--stall", "0.1@5"], "--fail, --stall or --fail-region cannot change it"),  # no --faults
         ([str(SHAPES / "star.png")], "would not be used"),
     ],
 )
