@@ -303,7 +303,8 @@ def ended_by_signals() -> Iterator[SignalWatch]:
 @contextlib.contextmanager
 def stopped_by_ctrl_c(runner: Runner) -> Iterator[None]:
     """A first Ctrl+C ends `runner`'s run after the step under way, so that its outputs and
-    summary keep what it reached; a second one interrupts at once (and keeps nothing)."""
+    summary keep what it reached; a second one interrupts at once (the outputs not written by
+    then are not written; each is written whole or not at all)."""
     previous = signal.getsignal(signal.SIGINT)
     if threading.current_thread() is not threading.main_thread() or not callable(previous):
         yield  # signals reach only the main thread; an ignored Ctrl+C stays ignored
