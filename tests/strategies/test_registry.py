@@ -51,6 +51,21 @@ def test_a_class_is_reachable_as_module_colon_class(tmp_path, monkeypatch):
     assert "nearest-first" not in strategies.REGISTRY
 
 
+def test_code_that_takes_a_builtin_name_is_refused_and_a_builtin_by_its_module_is_not(
+    tmp_path, monkeypatch
+):
+    """A user's class called "optimal" ran, and its summary, metrics and sweep rows said
+    optimal: results that claim another algorithm's name."""
+    module = tmp_path / "clash.py"
+    module.write_text(
+        readme_example().replace("@register\n", "").replace("nearest-first", "optimal")
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(InputError, match="calls itself 'optimal', a built-in strategy's name"):
+        strategies.get("clash:NearestFirst")
+    assert strategies.get("swarmshape.strategies.concurrent:Optimal").name == "optimal"
+
+
 def test_installed_packages_offer_strategies_through_entry_points(tmp_path, monkeypatch):
     (tmp_path / "plugin_pkg.py").write_text(readme_example().replace("@register\n", ""))
     info = tmp_path / "plugin_pkg-1.0.dist-info"

@@ -73,6 +73,11 @@ def get(name: str) -> type[Plugin]:
         raise InputError(f"strategy {name!r} has no name; a plug-in class sets name = '...'")
     if not dataclasses.is_dataclass(cls.Options):
         raise InputError(f"strategy {name!r}: its Options must be a @dataclass(frozen=True)")
+    if is_code(name) and available().get(cls.name, cls) is not cls:  # summaries, metrics, rows
+        raise InputError(
+            f"strategy {name!r} calls itself {cls.name!r}, a built-in strategy's name, which "
+            "its results would then claim; give it a name of its own"
+        )
     return cls
 
 
