@@ -1,6 +1,6 @@
 """Benchmark formation against what no run can beat: prints issue 11's table, writes JSON.
 
-    nice .venv/bin/python scripts/bench.py [--out docs/bench.json] [--quick] [--million]
+    nice .venv/bin/python scripts/bench.py [--out FILE] [--quick] [--million]
 
 Every figure is measured in this one run, on this machine, with seed 1 and the default
 `optimal` strategy at default limits (speed 0.5, acceleration 0.125) unless a row says
@@ -442,7 +442,12 @@ def _peak_gb() -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "bench.json")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        help="where the figures go (default docs/bench.json; docs/bench-quick.json with "
+        "--quick and docs/caps.json with --caps, so that neither replaces the full run's)",
+    )
     parser.add_argument("--quick", action="store_true", help="1,000 robots and fixed costs only")
     parser.add_argument("--million", action="store_true", help="add 1,000,000 robots, capped")
     parser.add_argument("--cap", type=float, default=1800.0, help="seconds for --million")
@@ -453,7 +458,7 @@ def main() -> None:
     if args.caps:
         with tempfile.TemporaryDirectory() as scratch:
             rows = caps(Path(scratch))
-        out = args.out if args.out != ROOT / "docs" / "bench.json" else ROOT / "docs" / "caps.json"
+        out = args.out or ROOT / "docs" / "caps.json"
         out.write_text(
             json.dumps({"date": date.today().isoformat(), "caps": rows}, indent=2) + "\n"
         )
@@ -494,9 +499,10 @@ def main() -> None:
                 {"case": "disc", **from_shell(disc(1_000_000), folder, cap=args.cap)}
             )
     results["load_average_after"] = os.getloadavg()[0]
-    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    out = args.out or ROOT / "docs" / ("bench-quick.json" if args.quick else "bench.json")
+    out.write_text(json.dumps(results, indent=2) + "\n")
     print_table(results)
-    print(f"\nwritten to {args.out}")
+    print(f"\nwritten to {out}")
 
 
 def print_row(row: dict, flush: bool = False) -> None:
