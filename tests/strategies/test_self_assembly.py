@@ -194,3 +194,18 @@ def test_robots_beside_a_stalled_robot_go_round_it():
     assert (swarm.state == STALLED).sum() == 1
     assert swarm.complete, run_metrics(swarm)
     assert swarm.overlap_total == 0
+
+
+def test_followers_go_round_a_robot_that_joined_beside_stalled_ones():
+    """Fuzz case 7208 (scripts/fuzz_programs.py): robots stalled at step 191 pass no gradient
+    on, and a robot that joined beside them had none; followers took it, without one, for a
+    robot about to move, waited behind it for good, and the run never ended. A joined robot
+    is a wall whatever its gradient: the run forms what the stalled robots leave reachable."""
+    shape = Shape(grid_from("### ### .## ### ##. ### ### ### .##")).solid()
+    world = build_world([GroupSpec("fuzz", shape, (1, 2, 3), 32)])
+    faults = Faults((FaultEvent(191, "stall", 0.22065149815005852),))
+    swarm = Swarm(world, create("self-assembly"), 599996301, RunConfig().params(), faults=faults)
+    Runner(swarm, max_steps=3000).finish()
+    assert swarm.complete and swarm.step_count < 3000
+    joined = swarm.driver.memory.state == JOINED
+    assert (swarm.state[joined] != STALLED).sum() == int(swarm.filled.sum())

@@ -369,8 +369,11 @@ class _View:
         memory.known[rows] = known
         still_there = known >= 0
         self.gradient = np.where(still_there, known >> 1, INFINITE)
-        self.stationary = still_there & (self.gradient < INFINITE)
-        self.joined = self.stationary & ((known & 1) == 1)
+        # a joined robot never moves again, so it is a wall with or without a gradient: one
+        # that joined beside stalled robots, which pass no gradient on, had none, and the
+        # followers that took it for a robot about to move waited behind it for good
+        self.joined = still_there & ((known & 1) == 1)
+        self.stationary = still_there & (self.gradient < INFINITE) | self.joined
         foreign = np.zeros(a * 25, dtype=bool)
         foreign[(base + slot)[~near.kin[keep]]] = True
         self.foreign = foreign.reshape(a, 25)
