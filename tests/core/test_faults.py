@@ -353,6 +353,8 @@ def test_events_parse_from_plain_values_and_text():
     for bad in ([{"kind": "remove"}], [{"step": 1, "amont": 1}], "0.2@3", [{"step": True}]):
         with pytest.raises(FaultError):
             events_from_values(bad, "faults")
+    with pytest.raises(FaultError, match="from 0 to 1,000,000,000,000, got 10000000000000"):
+        parse_event("0.5@10000000000000", "remove", "--fail")  # the message says the limit
 
 
 @pytest.mark.parametrize(

@@ -68,7 +68,9 @@ class FaultEvent:
     def __post_init__(self) -> None:
         where = f"fault at step {self.step}"
         if type(self.step) is not int or not 0 <= self.step <= MAX_STEP:
-            raise FaultError(f"a fault's step must be a whole number from 0, got {self.step!r}")
+            raise FaultError(
+                f"a fault's step must be a whole number from 0 to {MAX_STEP:,}, got {self.step!r}"
+            )
         if self.kind not in KINDS:
             raise FaultError(f"{where}: kind {self.kind!r} is not one of {', '.join(KINDS)}")
         amount = self.amount
