@@ -68,8 +68,7 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[str], object]) -
     os.close(fd)
     try:
         write(tmp)
-        # mkstemp makes it private: the mode of the file it replaces, or else the usual one
-        os.chmod(tmp, _mode_of(path, 0o666 & ~umask()))
+        os.chmod(tmp, _mode_for(path))  # mkstemp makes it private
         os.replace(tmp, path)
     except OSError as error:
         Path(tmp).unlink(missing_ok=True)
@@ -95,7 +94,7 @@ class StreamedFile:
     def commit(self) -> None:
         try:
             self.handle.close()
-            os.chmod(self._tmp, _mode_of(self.path, 0o666 & ~umask()))
+            os.chmod(self._tmp, _mode_for(self.path))
             os.replace(self._tmp, self.path)
         except OSError as error:
             self.discard()
@@ -254,12 +253,13 @@ def distinct_outputs(outputs: Iterable[tuple[str, Path]]) -> None:
         seen[key] = flag
 
 
-def _mode_of(path: Path, otherwise: int) -> int:
-    """The permission bits of the file at `path`, or `otherwise` if there is none."""
+def _mode_for(path: Path) -> int:
+    """The permission bits a file written to `path` gets: those of the file it replaces, or
+    the umask's for a new one."""
     try:
         return stat.S_IMODE(os.stat(path).st_mode)
     except OSError:
-        return otherwise
+        return 0o666 & ~umask()
 
 
 def umask() -> int:
