@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 import time
 
@@ -228,6 +229,17 @@ def test_a_kernel_compiling_in_a_step_is_not_taken_for_a_loop(monkeypatch):
         assert limited(compiles_then_works) == 2
         with pytest.raises(StepTooLong):
             limited(lambda: time.sleep(1.0))
+
+
+def test_a_tick_handled_after_the_call_leaves_no_timer_behind():
+    """A tick of the limit's timer can be handled just after its call ended. It set the timer
+    again, and where that came between the limit's last clearing of the timer and its giving
+    the signal back, the signal's default action ended the process later (a test worker, say,
+    whose run then waited for it for good)."""
+    with _time_limit(5.0) as limited:
+        limited(lambda: None)
+        signal.raise_signal(signal.SIGALRM)  # the tick, handled late
+        assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
 
 
 def test_code_that_fails_as_it_loads_is_its_own_failure(tmp_path, capsys):

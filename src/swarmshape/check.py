@@ -268,12 +268,14 @@ def _time_limit(seconds: float) -> Iterator[Callable[[Callable[[], T]], T]]:
         return
 
     began = [0.0, 0.0]  # when the call began, and the seconds spent compiling by then
+    running = [False]
 
     def stop(*_: object) -> None:
         """Stop the call, unless numba is compiling one of the project's kernels (raised in
         there, it broke numba) or did for part of the time: the timer fires again once the
-        call's own time is up."""
-        if compiled.compiling():
+        call's own time is up. A signal handled after the call ended does nothing: set again
+        then, the timer outlived the limit, and its signal killed the process."""
+        if not running[0] or compiled.compiling():
             return
         spent = time.perf_counter() - began[0] - (compiled.compile_seconds() - began[1])
         if spent < seconds:
@@ -283,10 +285,12 @@ def _time_limit(seconds: float) -> Iterator[Callable[[Callable[[], T]], T]]:
 
     def limited(call: Callable[[], T]) -> T:
         began[:] = [time.perf_counter(), compiled.compile_seconds()]
+        running[0] = True
         signal.setitimer(signal.ITIMER_REAL, seconds, seconds)  # again, if it is swallowed
         try:
             return call()
         finally:
+            running[0] = False
             signal.setitimer(signal.ITIMER_REAL, 0)
 
     previous = signal.signal(signal.SIGALRM, stop)
