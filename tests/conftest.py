@@ -49,6 +49,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption(
         "--slow", action="store_true", help="the slow tests too, and many more examples"
     )
+    parser.addoption(
+        "--shard",
+        default="0/1",
+        metavar="K/N",
+        help="only every Nth test, from the Kth (scripts/test runs N of these side by side)",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -64,13 +70,20 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Leave the tests marked slow out of a run without `--slow`, and say so."""
-    if config.getoption("--slow"):
-        return
-    slow = [item for item in items if item.get_closest_marker("slow")]
-    if slow:
-        config.hook.pytest_deselected(items=slow)
-        items[:] = [item for item in items if not item.get_closest_marker("slow")]
+    """Leave the tests marked slow out of a run without `--slow`, and in a shard of the suite
+    the other shards' tests; say so."""
+    if not config.getoption("--slow"):
+        _keep(config, items, [not item.get_closest_marker("slow") for item in items])
+    shard, shards = (int(part) for part in config.getoption("--shard").split("/"))
+    _keep(config, items, [index % shards == shard for index in range(len(items))])
+
+
+def _keep(config: pytest.Config, items: list[pytest.Item], kept: list[bool]) -> None:
+    """Keep the `items` marked in `kept`; the others are deselected."""
+    if not all(kept):
+        pairs = list(zip(items, kept, strict=True))
+        config.hook.pytest_deselected(items=[item for item, keep in pairs if not keep])
+        items[:] = [item for item, keep in pairs if keep]
 
 
 def slow_for(slow: str, param: str) -> object:
