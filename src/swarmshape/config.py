@@ -41,7 +41,7 @@ from swarmshape.core.swarm import Params
 from swarmshape.core.world import START_LAYOUTS
 from swarmshape.errors import InputError, SettingError, SettingWarning
 from swarmshape.io.bitmap import DEFAULT_THRESHOLD
-from swarmshape.io.scenario import scenario_settings
+from swarmshape.io.scenario import group_settings, scenario_settings
 
 LOCAL = frozenset({"local"})
 """Settings only local programs read (how well their robots sense and talk)."""
@@ -321,6 +321,11 @@ def configure(shape: str | Path | None = None, **given: Any) -> RunConfig:
             RunConfig(shape=path, **from_file)
         except InputError as error:  # say which file holds the value
             raise InputError(f"{path}: {error}") from None
+    for index, group in enumerate([] if path is None else group_settings(path)):
+        try:
+            RunConfig(shape=path, **group)
+        except InputError as error:
+            raise InputError(f"{path}: groups[{index}].{error}") from None
     chosen = {key: value for key, value in given.items() if value is not None}
     _known(chosen)
     file_options = from_file.get("options", {})

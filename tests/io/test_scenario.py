@@ -35,8 +35,18 @@ def write(tmp_path, text):
     [
         ("seed = 1\n", "at least one"),
         ("[[groups]]\nagents = 3\n", "needs a shape"),
-        ("[[groups]]\nshape = 'line.png'\nagents = 'many'\n", "agents must be int"),
-        ("[[groups]]\nshape = 'line.png'\nagents = true\n", "agents must be int"),
+        (
+            "[[groups]]\nshape = 'line.png'\nagents = 'many'\n",
+            r"groups\[0\]\.agents must be a whole",
+        ),
+        ("[[groups]]\nshape = 'line.png'\nagents = true\n", r"groups\[0\]\.agents must be a whole"),
+        # a group's own run settings named the command line's flag (--threshold), not the file
+        ("[[groups]]\nshape = 'line.png'\nagents = -3\n", r"s\.toml: groups\[0\]\.agents must"),
+        (
+            "[[groups]]\nshape = 'line.png'\n[[groups]]\nshape = 'line.png'\nthreshold = 7\n",
+            r"s\.toml: groups\[1\]\.threshold must be a number from 0 to 1, got 7",
+        ),
+        ("[[groups]]\nshape = 'line.png'\ncells = 0\n", r"s\.toml: groups\[0\]\.cells must be"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'blurple'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'rgb(999,999,999)'\n", "not a colour"),
         ("[[groups]]\nshape = 'line.png'\ncolour = 'hsl(999, 999%, 999%)'\n", "not a colour"),

@@ -46,7 +46,9 @@ from swarmshape.io.files import read_toml, readable_file
 PALETTE = ("#3a6fd8", "#d9483b", "#e69b23", "#8a4fc9", "#2fa8a0", "#c94f8a")
 """Group colours in order; none of them green (seeds) or grey (targets)."""
 
-GROUP_KEYS = {"name", "shape", "agents", "colour", "pose", "cells", "threshold", "invert"}
+GROUP_SETTINGS = ("agents", "cells", "threshold", "invert")
+"""Run settings that a group may set for itself."""
+GROUP_KEYS = {"name", "shape", "colour", "pose", *GROUP_SETTINGS}
 POSE_KEYS = {"x", "y", "rotation"}
 
 
@@ -116,6 +118,19 @@ def scenario_settings(path: str | Path) -> dict[str, Any]:
             "not as a top-level shape"
         )
     return {key: value for key, value in data.items() if key not in ("name", "groups")}
+
+
+def group_settings(path: str | Path) -> list[dict[str, Any]]:
+    """The run settings (`GROUP_SETTINGS`) that each group of a scenario file sets for itself,
+    as plain values, for the run to check as it checks the file's own; none for an image, or
+    for groups that are not a list of tables (loading the scenario says what is wrong)."""
+    path = Path(path)
+    if path.suffix.lower() != ".toml":
+        return []
+    groups = _read_toml(path)[0].get("groups")
+    if not isinstance(groups, list) or not all(isinstance(group, dict) for group in groups):
+        return []
+    return [{key: group[key] for key in GROUP_SETTINGS if key in group} for group in groups]
 
 
 def _read_toml(path: Path) -> tuple[dict[str, Any], _Where]:
