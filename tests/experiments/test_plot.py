@@ -141,6 +141,17 @@ def test_plots_into_a_file_are_one_clear_line(results, tmp_path, capsys):
     assert len(err) == 1 and "taken: cannot make the folder for the plots" in err[0], err
 
 
+def test_plots_into_a_dash_are_one_clear_line(results, tmp_path, capsys, monkeypatch):
+    """--out - made a folder named "-" (a dash is standard output to most tools)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["plot", str(results), "--out", "-"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "swarmshape: error: -: --out writes a folder, not standard output; name a folder"
+    ]
+    assert list(tmp_path.iterdir()) == []
+
+
 def looks(axes) -> list[tuple]:
     """Colour, line style and marker of each line drawn for a setting (not error bar caps)."""
     return [

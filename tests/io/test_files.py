@@ -251,6 +251,19 @@ def test_an_output_never_replaces_an_input_of_the_run_even_with_force(
 
 
 @pytest.mark.parametrize("option", ["--metrics", "--trace", "--save-state", "--frames"])
+def test_a_dash_is_not_taken_for_a_file_name(tmp_path, capsys, monkeypatch, option):
+    """A dash means standard output to most tools; --metrics - wrote a file named "-" in the
+    working folder, and the report said nothing of it."""
+    monkeypatch.chdir(tmp_path)
+    assert main([LINE, "--headless", option, "-"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.endswith(f"-: {option} writes a file, not standard output; name a file")
+    assert list(tmp_path.iterdir()) == []
+    assert main([LINE, "--headless", option, str(tmp_path / "-")]) == 0, "a file named so"
+    assert [path.name for path in tmp_path.iterdir()] == ["-"]
+
+
+@pytest.mark.parametrize("option", ["--metrics", "--trace", "--save-state", "--frames"])
 def test_a_symlink_loop_as_an_output_is_refused_and_left_alone(tmp_path, capsys, option):
     """Issue 29, cases 2 and 12: a link to itself was replaced by the metrics, exit 0; a loop
     as --frames was a traceback."""

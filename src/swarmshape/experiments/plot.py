@@ -22,7 +22,7 @@ import numpy as np
 
 from swarmshape.errors import InputError
 from swarmshape.experiments.results import read_rows
-from swarmshape.io.files import atomic_write
+from swarmshape.io.files import atomic_write, not_standard_output
 
 PLOTS = ("coverage", "steps")
 NEEDED = (
@@ -70,6 +70,7 @@ def plot_results(
 
     Existing plots are replaced only with `force`; everything is checked before anything is
     drawn."""
+    not_standard_output(out_dir, "--out", "a folder")
     targets = [out_dir / f"{name}.{form}" for name in PLOTS for form in formats]
     try:
         taken = [path for path in targets if path.exists()]

@@ -189,6 +189,13 @@ def read_toml(path: Path, expected: str, error: type[InputError] = InputError) -
         raise error(f"{path}: nested too deeply to be {expected}") from None
 
 
+def not_standard_output(path: Path, flag: str, what: str = "a file") -> None:
+    """Refuse ``-`` as an output's name: to most tools it means standard output, and taken
+    as a name it made a file (or folder) named ``-`` where the user looked for none."""
+    if os.fspath(path) == "-":
+        raise OutputError(f"-: {flag} writes {what}, not standard output; name {what}")
+
+
 def check_output(
     path: Path,
     flag: str,
@@ -202,7 +209,8 @@ def check_output(
     to the run; told apart by `identity`,
     whatever `may_replace` says: a run never writes over what it reads), or that would replace
     an existing file (or fill a non-empty folder) without `may_replace`. A symlink counts as the
-    file it points to."""
+    file it points to. ``-`` is refused too (`not_standard_output`)."""
+    not_standard_output(path, flag)
     target = Path(os.path.realpath(path))
     if os.path.islink(target):  # realpath stops at a link it cannot resolve: a loop
         raise OutputError(f"{path}: {flag} names a symlink that leads back to itself; name a file")
