@@ -116,11 +116,17 @@ def read_runs(path: Path) -> list[Run]:
     if missing:
         raise InputError(f"{path}: lacks the column {missing[0]}, which the plots need")
     runs = []
+    seen: dict[tuple, int] = {}
     for number, row in enumerate(rows, start=1):
         try:
             runs.append(_run(row))
         except ValueError as error:
             raise InputError(f"{path}: row {number}: {error}") from None
+        # a run counted twice would weigh twice in its setting's mean
+        run = tuple((name, value) for name, value in row.items() if name.startswith("config."))
+        if run in seen:
+            raise InputError(f"{path}: row {number} is the run of row {seen[run]} again")
+        seen[run] = number
     return runs
 
 
@@ -132,8 +138,8 @@ def _run(row: dict[str, str]) -> Run:
     except (ValueError, RecursionError):  # deep nesting exhausts the parser's stack (the fuzz)
         coverage = None
     numbers = isinstance(coverage, list) and all(map(_finite, coverage))
-    if not numbers or not coverage:
-        raise ValueError("coverage_curve is not a list of numbers")
+    if not numbers or not coverage or not all(0 <= value <= 1 for value in coverage):
+        raise ValueError("coverage_curve is not a list of numbers from 0 to 1")
     samples = steps_run // every + 1 + (steps_run % every > 0)
     if len(coverage) != samples:
         raise ValueError(
@@ -148,7 +154,7 @@ def _run(row: dict[str, str]) -> Run:
     return Run(
         setting=setting,
         robots=_whole(row, "agents", 1),
-        steps=None if row["steps"] == "" else _number(row, "steps"),
+        steps=None if row["steps"] == "" else _formed_at(row, steps_run),
         every=every,
         sampled=np.minimum(np.arange(len(coverage)) * every, steps_run),
         coverage=np.array(coverage, dtype=float),
@@ -162,14 +168,12 @@ def _whole(row: dict[str, str], column: str, least: int) -> int:
     return int(value)
 
 
-def _number(row: dict[str, str], column: str) -> float:
-    try:
-        number = float(row[column])
-    except ValueError:
-        number = math.nan
-    if not math.isfinite(number):
-        raise ValueError(f"{column} is not a number, got {row[column]!r}")
-    return number
+def _formed_at(row: dict[str, str], steps_run: int) -> int:
+    """The step the run formed at: one of those it ran."""
+    steps = _whole(row, "steps", 0)
+    if steps > steps_run:
+        raise ValueError(f"steps {steps} is past steps_run {steps_run}")
+    return steps
 
 
 def _finite(value: Any) -> bool:
