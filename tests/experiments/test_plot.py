@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import errno
 import io
 import json
 import os
@@ -158,6 +159,35 @@ def test_plots_into_a_dash_are_one_clear_line(results, tmp_path, capsys, monkeyp
         "swarmshape: error: -: --out writes a folder, not standard output; name a folder"
     ]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_plots_that_cannot_all_be_written_leave_the_old_ones(
+    results, tmp_path, capsys, monkeypatch
+):
+    """On a full disk the coverage plot was replaced and the steps plot was not: a pair that
+    no longer belonged together. The plots are written together or not at all."""
+    from swarmshape.experiments import plot
+
+    for name in ("coverage.png", "steps.png"):
+        (tmp_path / name).write_text(f"the old {name}")
+    saved = plot._save
+
+    def full_disk(figure, form, path):
+        if figure is figures["steps"]:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        saved(figure, form, path)
+
+    drawn = plot.draw_plots
+    figures = {}
+    monkeypatch.setattr(plot, "draw_plots", lambda runs: figures.update(drawn(runs)) or figures)
+    monkeypatch.setattr(plot, "_save", full_disk)
+    assert main(["plot", str(results), "--out", str(tmp_path), "--force"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.endswith("steps.png: cannot write it (No space left on device)"), line
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == {
+        "coverage.png": b"the old coverage.png",
+        "steps.png": b"the old steps.png",
+    }
 
 
 def looks(axes) -> list[tuple]:

@@ -11,6 +11,7 @@ the colours and the styles apart.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from collections import defaultdict
@@ -22,7 +23,7 @@ import numpy as np
 
 from swarmshape.errors import InputError
 from swarmshape.experiments.results import read_rows
-from swarmshape.io.files import atomic_write, not_standard_output
+from swarmshape.io.files import atomic_writes, not_standard_output
 
 PLOTS = ("coverage", "steps")
 NEEDED = (
@@ -91,15 +92,22 @@ def plot_results(
     except OSError as error:
         message = f"{out_dir}: cannot make the folder for the plots ({error.strerror})"
         raise InputError(message) from None
-    written = []
-    for name, figure in draw_plots(runs).items():
-        for form in formats:
-            path = out_dir / f"{name}.{form}"
-            save = figure.savefig
-            atomic_write(path, lambda tmp, form=form, save=save: save(tmp, format=form, dpi=120))
-            written.append(path)
-        plt.close(figure)
-    return written
+    figures = draw_plots(runs)
+    writes = {
+        out_dir / f"{name}.{form}": functools.partial(_save, figure, form)
+        for name, figure in figures.items()
+        for form in formats
+    }
+    try:
+        atomic_writes(list(writes.items()))  # all of them, or none (a full disk)
+    finally:
+        for figure in figures.values():
+            plt.close(figure)
+    return list(writes)
+
+
+def _save(figure: Any, form: str, path: str) -> None:
+    figure.savefig(path, format=form, dpi=120)
 
 
 def draw_plots(runs: list[Run]) -> dict[str, Any]:

@@ -14,7 +14,7 @@ import shutil
 import stat
 import tempfile
 import tomllib
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -59,23 +59,37 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[str], object]) -
     The temporary name keeps a short final suffix so that writers which pick a format from the
     extension (Pillow, pygame) still do. A symlink is written through to its target.
     """
-    path = Path(os.path.realpath(path))
+    atomic_writes([(path, write)])
+
+
+def atomic_writes(writes: Sequence[tuple[str | os.PathLike[str], Callable[[str], object]]]) -> None:
+    """`atomic_write` for files that belong together (a set of plots): every one is written
+    under its temporary name before any is renamed, so that a failure (a full disk) leaves
+    all of them as they were, not some new beside some old."""
+    done: list[tuple[str, Path]] = []
     try:
-        prefix, suffix = _temporary_prefix(path.parent), path.suffix[-16:]
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=prefix, suffix=suffix)
-    except OSError as error:
-        raise OutputError(f"{path}: cannot write there ({error.strerror})") from None
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, _mode_for(path))  # mkstemp makes it private
-        os.replace(tmp, path)
-    except OSError as error:
-        Path(tmp).unlink(missing_ok=True)
-        raise OutputError(f"{path}: cannot write it ({error.strerror or error})") from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        for given, write in writes:
+            path = Path(os.path.realpath(given))
+            try:
+                prefix, suffix = _temporary_prefix(path.parent), path.suffix[-16:]
+                fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=prefix, suffix=suffix)
+            except OSError as error:
+                raise OutputError(f"{path}: cannot write there ({error.strerror})") from None
+            os.close(fd)
+            done.append((tmp, path))
+            try:
+                write(tmp)
+                os.chmod(tmp, _mode_for(path))  # mkstemp makes it private
+            except OSError as error:
+                raise OutputError(f"{path}: cannot write it ({error.strerror or error})") from None
+        for tmp, path in done:
+            try:
+                os.replace(tmp, path)
+            except OSError as error:
+                raise OutputError(f"{path}: cannot write it ({error.strerror or error})") from None
+    finally:
+        for tmp, _ in done:
+            Path(tmp).unlink(missing_ok=True)
 
 
 class StreamedFile:
