@@ -90,12 +90,13 @@ class Recorder(Observer):
         pixels = frame(swarm, self.size, self._renderer, caption(swarm))
         image = Image.fromarray(pixels).quantize(colors=32)
         if self.frames is not None:
-            path = self._unfinished.path / f"frame-{swarm.step_count:07d}.png"
+            name = f"frame-{swarm.step_count:07d}.png"
             try:
-                image.save(path, format="PNG")
-            except OSError as error:
-                raise OutputError(f"{path}: cannot write it ({error.strerror or error})") from None
-            self._written.add(path.name)
+                image.save(self._unfinished.path / name, format="PNG")
+            except OSError as error:  # named where the user will look for it
+                problem = error.strerror or error
+                raise OutputError(f"{self.frames / name}: cannot write it ({problem})") from None
+            self._written.add(name)
         if self.animation is not None:
             self._images.append(image)
             if len(self._images) > self._keep:
