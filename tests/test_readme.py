@@ -88,7 +88,7 @@ def _seed_one(config: RunConfig) -> RunConfig:
 def _closed_after(frames: int, tick):
     """`tick` that closes each window after `frames` frames. Counted by the window itself, not
     its id: a new window given a closed one's id started past the count, was never closed,
-    and its test ran for good (CI, stop 59: cut at 90 minutes)."""
+    and its test ran for good (seen under load; the likely cause of CI's hang at stop 59)."""
     shown: weakref.WeakKeyDictionary[Viewer, int] = weakref.WeakKeyDictionary()
 
     def tick_then_close(viewer: Viewer) -> bool:
