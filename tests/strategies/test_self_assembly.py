@@ -209,3 +209,25 @@ def test_followers_go_round_a_robot_that_joined_beside_stalled_ones():
     assert swarm.complete and swarm.step_count < 3000
     joined = swarm.driver.memory.state == JOINED
     assert (swarm.state[joined] != STALLED).sum() == int(swarm.filled.sum())
+
+
+def test_followers_stop_at_a_dead_end_that_stalled_robots_make():
+    """Fuzz case 7251 (scripts/fuzz_programs.py): robots stalled at step 129, some inside the
+    structure, left one-cell dead ends in it. A follower that found walls ahead and on both
+    hands turned back into the follower behind it, each waiting for the other for good; and
+    one beside a stalled robot took its cell for a pocket left free (`_pockets` saw only the
+    structure) and waited to step into it for good. At step 3,000 the run stood at 44 %. A
+    follower stops at a dead end, and stalled robots wall pockets in as the structure does."""
+    fuzzed = "#.##.##.#. #..######. #.##.#.### ######..#. #.....###. ###..#...# #.#.####.. "
+    fuzzed += "#.#.##.#.# ..###.#### ..##.##### ##.####.#."
+    shape = Shape(grid_from(fuzzed)).solid()
+    world = build_world([GroupSpec("fuzz", shape, (1, 2, 3), 86)])
+    params = RunConfig(msg_loss=0.1, distance_noise=0.1).params()
+    faults = Faults((FaultEvent(129, "stall", 0.1994635587672014),))
+    swarm = Swarm(world, create("self-assembly"), 2106781546, params, faults=faults)
+    Runner(swarm, max_steps=3000).finish()
+    assert swarm.complete and swarm.step_count < 3000
+    assert swarm.overlap_total == 0
+    joined = swarm.driver.memory.state == JOINED
+    assert (swarm.state[joined] != STALLED).sum() == int(swarm.filled.sum())
+

@@ -24,8 +24,9 @@ on until it hears the structure (`localise.roam`), then heads for it.
   that stepped back to let another pass turns round again);
 - **joining**: once its estimate lies in the shape, a robot stops for good when its next move
   would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
-  end of the layer being built); on the lattice, not where it would wall free cells of the
-  shape off (`_pockets`, `_onward`: it moves on into them instead).
+  end of the layer being built); on the lattice, also at a dead end (walls ahead and on both
+  hands), and not where it would wall free cells of the shape off (`_pockets`, `_onward`: it
+  moves on into them instead).
 
 As in the paper, shapes with holes cannot be formed (the runner warns), and errors in gradient
 and position warp the shape more the farther it grows from the seeds.
@@ -530,10 +531,17 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     # robot may turn from the wall, and out of the shape
     leaves = (choice == 0) | ~sense.blueprint.contains(sense.group, cell + STEPS[choice])
     leaves |= ~sense.blueprint.contains(sense.group, cell + STEPS[way])
+    # a dead end: walls ahead and on both hands, the only way on back the way it came. The
+    # paper's round robots on a continuous floor never meet one inside the shape; on the
+    # lattice a stalled robot or a one-cell notch makes one, and the follower turning back met
+    # the one behind it head on, each waiting for the other for good. It stops there: its one
+    # free side is the cell it came from, so it walls nothing off
+    dead_end = choice == REVERSE[heading]
+    ends = layer_end | leaves | dead_end
     # never seal a pocket of the shape: step into it instead (see `_pockets`)
-    stopping = np.flatnonzero(inside & (layer_end | leaves))
+    stopping = np.flatnonzero(inside & ends)
     sealed = np.zeros(len(choice), dtype=np.int64)
-    pockets = _pockets(view.stationary[stopping])
+    pockets = _pockets(walls[stopping])
     for d in range(1, 5):
         beside = cell[stopping] + STEPS[d]
         pocket = pockets[:, d - 1] & sense.blueprint.contains(sense.group[stopping], beside)
@@ -543,7 +551,7 @@ def _follow(view: _View, sense: Perception, memory: Memory, moves: np.ndarray) -
     on = stopping[sealed[stopping] == 0]
     barred = view.facing[on] | view.foreign[on]
     onward[on] = _onward(walls[on], barred, way[on], cell[on], sense.group[on], sense.blueprint)
-    join = inside & (layer_end | leaves) & (sealed == 0) & (onward == 0)
+    join = inside & ends & (sealed == 0) & (onward == 0)
     way = np.where(sealed > 0, sealed, np.where(onward > 0, onward, way))
     state[join] = JOINED
     memory.gradient[join] = mine[join]
@@ -592,13 +600,14 @@ def _reach_beside(walls: np.ndarray) -> np.ndarray:
     return reach
 
 
-def _pockets(stationary: np.ndarray) -> np.ndarray:
+def _pockets(walls: np.ndarray) -> np.ndarray:
     """Per robot and direction d (1 to 4, ``(a, 4)``), whether the free cells one step in
-    direction d form a pocket that the built structure and the robot itself wall in, within
-    its 5x5 window (`stationary`, ``(a, 25)``): if the robot stopped here, no robot could ever
-    reach them (a lattice's dead ends, which the paper's round robots on a continuous floor do
-    not meet)."""
-    reach = _reach_beside(stationary)
+    direction d form a pocket that the built structure, stalled robots and the robot itself
+    wall in, within its 5x5 window (`walls`, ``(a, 25)``): if the robot stopped here, no robot
+    could ever reach them (a lattice's dead ends, which the paper's round robots on a
+    continuous floor do not meet). A stalled robot's own cell is no pocket: a follower that
+    took it for one waited to step into it for good."""
+    reach = _reach_beside(walls)
     return reach.any(axis=2) & ~(reach & BORDER).any(axis=2)
 
 
