@@ -20,7 +20,7 @@ from swarmshape.errors import InputError
 from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import create
-from swarmshape.strategies.self_assembly import JOINED, WAIT, WANDER, SelfAssembly
+from swarmshape.strategies.self_assembly import JOINED, STOPPED, WAIT, WANDER, SelfAssembly
 from tests.conftest import SHAPES, each_choice, grid_from
 
 
@@ -231,3 +231,19 @@ def test_followers_stop_at_a_dead_end_that_stalled_robots_make():
     joined = swarm.driver.memory.state == JOINED
     assert (swarm.state[joined] != STALLED).sum() == int(swarm.filled.sum())
 
+
+def test_a_run_whose_last_robots_stopped_comes_to_rest_under_noise():
+    """The 8-cell ring (its hole is warned of: robots join only the edge of what is built),
+    seed 1, with noisy senses: 37 robots joined, and three went round the structure without
+    finding a cell and stopped. The stopped ones went on fixing their positions from noisy
+    offsets, so their broadcasts changed every step, and the run never came to rest: it ran
+    to the step cap. A stopped robot keeps its estimate, as a joined one does, and the run
+    ends once all are still."""
+    config = configure(SHAPES / "ring.png", strategy="self-assembly", cells=8, seed=1,
+                       msg_loss=0.1, distance_noise=0.1)  # fmt: skip
+    with pytest.warns(ShapeWarning, match="self-assembly cannot form those"):
+        swarm = build(config)
+    run(swarm, max_steps=5000)
+    state = swarm.driver.memory.state
+    assert (state == STOPPED).any() and np.isin(state, (JOINED, STOPPED)).all()
+    assert swarm.driver.quiet and swarm.step_count < 5000

@@ -414,13 +414,16 @@ def _gradient(view: _View, memory: Memory) -> None:
 def _localise(sense: Perception, memory: Memory) -> None:
     """Robots at rest near seeds or joined robots fix their position from them: the mean of
     each reference's position less its sensed offset (two are needed for a first fix), and
-    move a quarter of the way there (the paper's step); joined robots keep theirs."""
+    move a quarter of the way there (the paper's step); joined and stopped robots keep
+    theirs: a stopped one that went on fixing it from noisy offsets changed its broadcast
+    every step, so a run whose last robots had stopped never came to rest (`QUIET`)."""
     n = len(sense)
     said = MESSAGE.read(sense.message)
     robot = sense.heard & sense.kin & ~sense.seed & (said.state == JOINED + 1)
     robot &= said.localised == 1
     seed = sense.heard & sense.kin & sense.seed
-    open_owner = sense.ready & (memory.state != JOINED)
+    open_ = (memory.state != JOINED) & (memory.state != STOPPED)
+    open_owner = sense.ready & open_
     use = np.flatnonzero((robot | seed) & open_owner[sense.owner])
     me = sense.owner[use]
     reference = np.where(
@@ -432,7 +435,6 @@ def _localise(sense: Perception, memory: Memory) -> None:
         [np.bincount(me, estimate[:, 0], minlength=n), np.bincount(me, estimate[:, 1], n)]
     )
     fix = total / np.maximum(count, 1)[:, None]
-    open_ = memory.state != JOINED
     first = open_ & ~memory.localised & (count >= 2)
     memory.position[first] = fix[first]
     again = open_ & memory.localised & (count >= 1)
