@@ -298,17 +298,11 @@ def open_news(
     seeds' corner from step 150 to 300, while the empty rim cells lay in its notches. Returns
     the hops and news, and each robot's word: a cell said taken and how old that is (`cap`:
     none)."""
-    n, k = free.shape
-    r = view.reach
-    rim = around.depth(offsets[None]) == 1
-    alone = np.ones((n, k), dtype=bool)
-    for step in STEPS[1:]:
-        beside = offsets + step
-        seen = (np.abs(beside) <= r).all(axis=1)
-        x, y = np.clip(beside + r, 0, 2 * r).T
-        out = around.depth(beside[None]) == 0
-        alone &= ~(view.taken[:, x, y] & seen[None] & out)
-    wanted = free & rim & alone
+    n = len(free)
+    if np.abs(offsets).max(initial=0) + 1 > around.reach:
+        raise ValueError(f"a cell beside one looked at lies beyond {around.reach} cells")
+    wanted = np.empty_like(free)
+    _unwatched(around.depths, around.reach, view.taken, view.reach, offsets, free, wanted)
     distance = np.abs(offsets).sum(axis=1)
     nearest = np.argmin(np.where(wanted, distance[None], np.iinfo(np.int64).max), axis=1)
     found = frame + offsets[nearest]
@@ -337,6 +331,35 @@ def open_news(
     gone[dropped] = memory.news[dropped]
     gone_age[dropped] = np.where(seen_taken, 0, told)[dropped]
     return hops, news, gone, gone_age
+
+
+@njit
+def _unwatched(
+    depth: np.ndarray,
+    reach: int,
+    taken: np.ndarray,
+    sight: int,
+    offsets: np.ndarray,
+    free: np.ndarray,
+    wanted: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
+    """`open_news`'s cells to tell of: per robot and window offset, a `free` cell on the rim
+    (`depth` 1, in `Around`'s squares of `reach` cells either way) with no robot it senses
+    (`taken`, `View`'s squares of `sight`) outside beside it. As numpy passes, a gather per
+    way cost a 10,000-robot `mean-shift` step 12 ms."""
+    for robot in range(free.shape[0]):
+        for j in range(free.shape[1]):
+            x, y = offsets[j, 0], offsets[j, 1]
+            wanted[robot, j] = free[robot, j] and depth[robot, x + reach, y + reach] == 1
+            for direction in range(1, 5):
+                if not wanted[robot, j]:
+                    break
+                bx, by = x + STEPS[direction, 0], y + STEPS[direction, 1]
+                if abs(bx) > sight or abs(by) > sight:
+                    continue  # beyond its senses: nobody it knows of
+                outside = depth[robot, bx + reach, by + reach] == 0
+                if outside and taken[robot, bx + sight, by + sight]:
+                    wanted[robot, j] = False
 
 
 @njit
