@@ -165,7 +165,7 @@ class _Fields:
 
     def slots(self, targets: np.ndarray) -> np.ndarray:
         """Each target's row in `fields`, working out the fields not kept."""
-        ends, which = np.unique(targets, axis=0, return_inverse=True)
+        ends, which = _unique_cells(targets)
         keys = [(x, y) for x, y in ends.tolist()]
         for key in keys:  # the ones used now last, so they are given up last
             if key in self.slot:
@@ -188,6 +188,19 @@ class _Fields:
             self.fields[row] = _field(self.blueprint, self.group, *key).ravel()
             self.slot[key] = row
         return np.array([self.slot[key] for key in keys], dtype=np.int64)[which.reshape(-1)]
+
+
+def _unique_cells(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`np.unique(cells, axis=0, return_inverse=True)` for cells ``(k, 2)``, through one
+    integer a cell that sorts as the rows do: the row-wise sort cost a 10,000-robot
+    `mean-shift` step 7 ms."""
+    if not len(cells):
+        return cells.reshape(0, 2), np.zeros(0, dtype=np.int64)
+    low = cells.min(axis=0)
+    height = int(cells[:, 1].max() - low[1]) + 1
+    keys, which = np.unique((cells[:, 0] - low[0]) * height + (cells[:, 1] - low[1]),
+                            return_inverse=True)  # fmt: skip
+    return np.stack([keys // height + low[0], keys % height + low[1]], axis=1), which
 
 
 def _fields(blueprint: Blueprint, group: int) -> _Fields:
