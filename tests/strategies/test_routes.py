@@ -136,3 +136,19 @@ def test_route_fields_are_what_dijkstras_method_gives_on_the_same_graph(rows, co
     start = data.draw(st.integers(0, rows * columns - 1))
     expected = scipy_field(cost, seeds, start, columns)
     assert np.array_equal(routes._cheapest(cost, seeds, start, columns), expected)
+
+
+@given(
+    cells=st.lists(st.tuples(st.integers(-40, 40), st.integers(-40, 40)), max_size=30).map(
+        lambda cells: np.array(cells, dtype=np.int64).reshape(-1, 2)
+    )
+)
+def test_the_distinct_goal_cells_come_in_the_order_and_with_the_index_of_a_row_wise_unique(
+    cells,
+):
+    """The fields are kept in the order of the distinct goals, so the shortcut through one
+    integer a cell must give exactly what `np.unique(axis=0)` gives."""
+    ends, which = routes._unique_cells(cells)
+    expected, inverse = np.unique(cells, axis=0, return_inverse=True)
+    assert np.array_equal(ends, expected) and ends.dtype == expected.dtype
+    assert np.array_equal(which.reshape(-1), inverse.reshape(-1))
