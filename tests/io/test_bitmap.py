@@ -22,6 +22,7 @@ from swarmshape.io.bitmap import (
     read_picture,
     save_grid,
 )
+from swarmshape.io.bitmap import _Sizes as Sizes  # the likeness each size is judged by
 from tests import pictures
 
 
@@ -296,6 +297,17 @@ def test_the_default_size_keeps_a_users_picture(tmp_path, name, known, lost_at_3
     assert iou_at_full_size(picture.ink, whole) >= KEPT
     assert (cells > DEFAULT_CELLS) == lost_at_32
     assert (pieces_and_holes(resample(picture.ink, DEFAULT_CELLS)) != kept) == lost_at_32
+
+
+@pytest.mark.parametrize("name", ["word", "lines"])
+def test_a_grid_loses_no_more_parts_or_holes_than_the_picture_has(tmp_path, name):
+    """Each part counts once, however many ways it is lost: counted per piece of the grid,
+    the line drawing at 60 cells lost "3 of the picture's 2 parts", a word at 28 "4 of the
+    picture's 2 holes"."""
+    sizes = Sizes(read_picture(getattr(pictures, name)(tmp_path / f"{name}.png")))
+    for cells in range(20, 160, 4):
+        found = sizes.likeness(cells)
+        assert 0 <= found.lost_parts <= found.parts and 0 <= found.lost_holes <= found.holes
 
 
 @pytest.mark.parametrize("name", ["word", "lines"])
