@@ -1,4 +1,4 @@
-"""Pictures like a user's, drawn with Pillow: a word, a line drawing, a ring, a photo.
+"""Pictures like a user's, drawn with Pillow: a word, a logo, a line drawing, a ring, a photo.
 
 Each is drawn at the size a user's file would have, with the pieces and holes it is known to
 have, so a test can ask whether a shape keeps them."""
@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from swarmshape.ui.render import FONT_FILE
+
 
 def word(path: Path, text: str = "debian 12") -> Path:
     """Black text on white in Pillow's own font, 80 pixels high: letters with holes (d, e,
@@ -19,6 +21,18 @@ def word(path: Path, text: str = "debian 12") -> Path:
     image = Image.new("L", (right + 20, bottom + 20), 255)
     ImageDraw.Draw(image).text((10, 10), text, font=font, fill=0)
     image.save(path)
+    return path
+
+
+def logo(path: Path) -> Path:
+    """A ten-letter word logo in bold, seven times as wide as it is high (the shipped DejaVu
+    Sans at 120 pixels, its strokes 2 pixels thicker, widened by a tenth): its smaller
+    letters have less ink than 4 cells of a grid 32 cells across, its counters less than 1."""
+    font = ImageFont.truetype(FONT_FILE, 120)
+    *_, right, bottom = font.getbbox("swarmshape", stroke_width=2)
+    image = Image.new("L", (right + 20, bottom + 20), 255)
+    ImageDraw.Draw(image).text((10, 10), "swarmshape", font=font, fill=0, stroke_width=2)
+    image.resize((round(image.width * 1.1), image.height)).save(path)
     return path
 
 

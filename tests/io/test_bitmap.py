@@ -270,8 +270,8 @@ def iou_at_full_size(ink: np.ndarray, grid: np.ndarray) -> float:
     return (scaled & ink).sum() / (scaled | ink).sum()
 
 
-USERS = [("word", None, True), ("lines", pictures.LINES, True), ("ring", pictures.RING, False),
-         ("photo", pictures.PHOTO, False)]  # fmt: skip
+USERS = [("word", None, True), ("logo", None, True), ("lines", pictures.LINES, True),
+         ("ring", pictures.RING, False), ("photo", pictures.PHOTO, False)]  # fmt: skip
 """Each picture, its pieces and holes when known, and whether 32 cells lose it."""
 
 
@@ -299,7 +299,7 @@ def test_the_default_size_keeps_a_users_picture(tmp_path, name, known, lost_at_3
     assert (pieces_and_holes(resample(picture.ink, DEFAULT_CELLS)) != kept) == lost_at_32
 
 
-@pytest.mark.parametrize("name", ["word", "lines"])
+@pytest.mark.parametrize("name", ["word", "logo", "lines"])
 def test_a_grid_loses_no_more_parts_or_holes_than_the_picture_has(tmp_path, name):
     """Each part counts once, however many ways it is lost: counted per piece of the grid,
     the line drawing at 60 cells lost "3 of the picture's 2 parts", a word at 28 "4 of the

@@ -108,9 +108,9 @@ class Likeness:
     """How much of its picture a grid keeps. The grid is scaled back up to a reference of the
     picture (its ink area-averaged to a few pixels a cell): `iou` is the ink they share over
     the ink of either, the picture's as fractions. The picture's parts are its pieces of ink
-    (8-connected) and its holes (4-connected) of `PART` cells or more, and no smaller than a
-    cell of the coarsest grid asked about; each must be kept: overlapped by the grid, mostly
-    by one piece, and by a piece of its own (see `_unkept`)."""
+    (8-connected) and its holes (4-connected) no smaller than a cell of the coarsest grid
+    asked about, of as many cells (see `likeness`); each must be kept: overlapped by the grid,
+    mostly by one piece, and by a piece of its own (see `_unkept`)."""
 
     iou: float
     parts: int
@@ -139,14 +139,19 @@ class Likeness:
 
 def likeness(reference: np.ndarray, grid: np.ndarray, coarsest: int) -> Likeness:
     """How much of a picture, given as a `reference` of ink fractions, `grid` keeps. A part
-    counts when it has `PART` of the grid's cells and at least one cell of a grid `coarsest`
-    across: finer detail (the grain of a photo, which grows without end as the grid does) is
-    not asked for."""
+    counts when it has at least one cell of a grid of `coarsest` x `coarsest` cells spread
+    over the picture's box, and `PART` of the grid's cells or of that grid's, whichever are
+    smaller: finer detail (the grain of a photo, which grows without end as the grid does) is
+    not asked for, and a grid coarser than that one is asked what it would keep. Counted by
+    the grid's own cells, a ten-letter word logo 32 cells across, 4 rows of cells 26 pixels
+    wide, was asked to keep only its seven largest letters and none of its counters, and was
+    given as 32 x 4 cells of blots with no warning."""
     scaled = stretched(grid, reference.shape)
     shared = float(np.sum(reference, where=scaled, dtype=np.float64))
     either = float(np.sum(reference, where=~scaled, dtype=np.float64)) + float(scaled.sum())
     cell = reference.shape[0] / grid.shape[0] * reference.shape[1] / grid.shape[1]
-    least = max(PART * cell, (max(reference.shape) / coarsest) ** 2)
+    coarse = reference.size / coarsest**2
+    least = max(PART * min(cell, coarse), coarse)
     ink = reference >= 0.5
     eight = np.ones((3, 3), dtype=bool)
     parts, lost_parts = _unkept(_parts(ink, eight), _parts(grid, eight, scaled.shape), least)
