@@ -34,6 +34,12 @@ def test_headless_run_prints_a_summary_and_writes_metrics(tmp_path, capsys):
     assert metrics["groups"][0]["steps"] == metrics["steps"] > 0
 
 
+def test_the_summary_counts_one_robot_lost_in_the_singular(capsys):
+    args = [str(SHAPES / "square.png"), "--headless", "--agents", "70", "--fail", "1@40"]
+    assert main([*args, "--seed", "2"]) == 0
+    assert "1 fault: 1 robot lost, 0 stalled" in capsys.readouterr().out
+
+
 def test_same_seed_gives_the_same_metrics_file_byte_for_byte(tmp_path):
     files = []
     for name in ("a.json", "b.json"):

@@ -423,7 +423,7 @@ def _fault_summary(metrics: dict[str, Any]) -> str:
         notes.append(f"{_count(metrics['cells_left_open'], 'cell')} left open: too few robots")
     lost = f" ({'; '.join(notes)})" if notes else ""
     return (
-        f"; {_count(len(faults), 'fault')}: {metrics['robots_lost']:,} robots lost, "
+        f"; {_count(len(faults), 'fault')}: {_count(metrics['robots_lost'], 'robot')} lost, "
         f"{metrics['robots_stalled']:,} stalled{lost}, {len(recovered)} recovered{slowest}"
     )
 
