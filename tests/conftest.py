@@ -6,6 +6,7 @@ import importlib.util
 import json
 import os
 import select
+import signal
 import subprocess
 import sys
 import tempfile
@@ -60,6 +61,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 def pytest_configure(config: pytest.Config) -> None:
     global _slow
     config.addinivalue_line("markers", "slow: runs only with --slow (large swarms, long runs)")
+    # A shell without job control starts a command put in the background (scripts/test's
+    # shards but the first, where no `timeout` resets it) with Ctrl+C ignored, and so every
+    # run a test starts: the tests of Ctrl+C then failed. Taken back, as at an interactive
+    # prompt.
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     _slow = config.getoption("--slow")
     if _slow:
         settings.load_profile("slow")
