@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
 
 NOT_RUNNABLE = {
-    "scripts/test": "the whole suite, this test among it: 5 minutes on two cores",
+    "scripts/test": "the whole suite, this test among it: 2 to 4 minutes on two cores",
     "swarmshape benchmark my_policy.py:Mine": "a policy the user writes, on all eight tasks up to "
     "10,000 robots (tens of minutes); tests/env/ run the command on small tasks",
 }
