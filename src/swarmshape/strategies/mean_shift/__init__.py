@@ -14,10 +14,9 @@ Each step a robot:
 4. moves one cell the way that sum points most, among the cells it may enter: a robot inside
    the shape stays inside it and enters only cells deeper in it than its own, so that the
    empty cell it leaves lies nearer the robots outside, and one in place enters only a cell
-   they cannot reach (`holes`), or, when robots outside wait with no empty cell in sight
-   (beside the shape or in a pocket it encloses), one that carries a hole a move nearer the
-   nearest of them (`holes.pulled`), or, on the rim, one that stalled robots wall off from
-   them (`holes.unwalled`); a robot outside that can reach an empty
+   they cannot reach (`holes`), or, when a robot waits in a pocket the shape encloses, one
+   that carries a hole nearer to it (`holes.pulled`), or, on the rim, one that stalled
+   robots wall off from them (`holes.unwalled`); a robot outside that can reach an empty
    shape cell it senses takes only moves that bring it nearer one (`explore.nearer`); toward
    an empty cell of a piece that only pockets touch, a robot steps across the pocket
    (`holes.across_pockets`);
@@ -92,8 +91,8 @@ MESSAGE = Schema(
 next step, the way it is moving and how far along, and its hops to the seeds through robots at
 rest (see `skills.localise`); an empty rim cell it
 has news of and its hops to the robot that sees it, a cell it has word is taken and how old
-that word is (`holes.open_news`); its moves through robots to the nearest robot outside
-that waits with no empty cell in sight (`holes.pulled`), and its hops to a robot that sees an
+that word is (`holes.open_news`); its hops to a robot
+waiting in a pocket of the shape (`holes.pulled`), and its hops to a robot that sees an
 empty cell of the shape (`MeanShift._tour`), counts said as `relay.said` puts them (0:
 none)."""
 
@@ -122,8 +121,6 @@ class MeanShift(Program):
         "tour": Slot(np.int64, -1),
         "toured": Slot(np.int64, 0),
         "waited": Slot(np.int64, 0),
-        "carried": Slot(bool, False, added=True),
-        "placed_in": Slot(np.int64, -1, added=True),
         "walled": Slot(np.int64, 0, 4, added=True),
         "rounding": Slot(np.int64, 0, added=True),
         "facing": Slot(np.int64, 0, added=True),
@@ -227,10 +224,7 @@ class MeanShift(Program):
         rows = np.flatnonzero(outside & sees)
         walls = explore.seeded(view.taken[rows], frame[rows])
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
-        beside = outside & ~sees & (explore.grey(blueprint, group, base) == 1)
-        pullers = waiting | beside
-        touching = speaks & (np.abs(view.cells).sum(axis=1) == 1)
-        pull = self._hops(sense, touching, said.pull, pullers, on_shape | pullers, cap)
+        pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)
         across = np.zeros_like(toward)
         if around.any_sealed:
             in_pocket = outside & around.enclosed(offset)
@@ -248,9 +242,6 @@ class MeanShift(Program):
         # in place until it moves: a move asked for and not made (the cell taken first) leaves
         # it where it was, and out of place it would go on to carry open holes (`holes`)
         memory.in_place = on_shape & sense.ready & (stays | memory.in_place)
-        digest = blueprint.digest(group)
-        placed = np.where(memory.placed_in < 0, digest, memory.placed_in)
-        memory.placed_in = np.where(memory.in_place, placed, -1)
         memory.state = np.select(
             [~localised, memory.in_place, on_shape], [LOST, IN_PLACE, INSIDE], OUTSIDE
         )
@@ -306,8 +297,8 @@ class MeanShift(Program):
     ) -> np.ndarray:
         """Each robot's hops to the nearest of `sources`, from the `counts` its neighbours
         said (per entry; those `heard`), passed on by `relays` only: `cap` (none) for the
-        others. Robots waiting outside pull through robots on the shape, who alone can carry a
-        hole to them (`holes.pulled`)."""
+        others. Robots waiting in a pocket pull through robots on the shape, who alone can
+        carry a hole to them (`holes.pulled`)."""
         told = np.zeros((len(sense.owner), 0), dtype=np.int64)
         found = np.zeros((len(sense), 0), dtype=np.int64)
         hops, _ = relay.relay(sense, heard, relay.heard(counts), told, sources, found, cap)
@@ -332,12 +323,10 @@ class MeanShift(Program):
         """Each robot's move: the way its command points most among the cells it may enter
         from its base (see the module's description); under way, on straight ahead or none.
         A robot outside that can reach an empty shape cell it senses moves only `toward` it
-        ``(n, 4)`` (see `explore.nearer`); one in place that hears a `pull` only carries holes
-        toward the robot waiting outside that it comes from (`holes.pulled`), and so does one
-        a pull moved, until it stops: drawn back by the mean shift into the cell it left, it
-        carried the hole back again, for good (the 46-robot star). A robot with a way
-        `across` pockets to an empty cell of a piece that only pockets touch takes it
-        (`holes.across_pockets`), in place or not.
+        ``(n, 4)`` (see `explore.nearer`); one inside that hears a `pull` only carries holes
+        toward the pocket it comes from (`holes.pulled`): drawn back into the cell it left, it
+        would carry the hole back again. A robot with a way `across` pockets to an empty cell
+        of a piece that only pockets touch takes it (`holes.across_pockets`), in place or not.
 
         A robot outside at rest with robots in every way it wants for more than `patience`
         steps on end steps to a free cell at random. Two robots going round the shape the
@@ -360,14 +349,11 @@ class MeanShift(Program):
         drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
         inward = deeper & (~(met | empty) | drawn)
         inward |= holes.unwalled(sense, memory, around, said, view, offset, open_ & in_shape)
-        # a robot coming in beside a hole keeps it; robots waiting outside pull the others, but
-        # one in place since before its shape last changed only carries holes robots outside
-        # cannot reach, as before: a live reshape moves no robot on a kept cell
-        carrying = (memory.in_place | memory.carried) & (pull < cap)
-        current = memory.placed_in == sense.blueprint.digest(sense.group)
-        to_pull = open_ & in_shape & ~met & (~empty | (current | memory.carried)[:, None])
-        to_pull &= holes.pulled(sense, said.pull, view, into, pull, cap)
-        inward[carrying] = to_pull[carrying]
+        # a robot coming in beside a hole keeps it; one waiting in a pocket pulls the others
+        pulling = inside & (pull < cap)
+        to_pocket = open_ & in_shape & ~met
+        to_pocket &= holes.pulled(sense, said, view, into, pull, cap)
+        inward[pulling] = to_pocket[pulling]
         off_shape = open_ & ~in_shape & across
         crossing = off_shape.any(axis=1)
         inward[crossing] = off_shape[crossing]
@@ -376,7 +362,6 @@ class MeanShift(Program):
         moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)
         moves[sense.cruising & (moves != sense.heading)] = 0
         moves[~sense.ready & ~sense.cruising] = 0
-        memory.carried = np.where(moves > 0, carrying, memory.carried & ~sense.ready)
         kept_waiting = memory.localised & ~inside & sense.ready & ~sense.cruising
         kept_waiting &= wanted.any(axis=1) & ~outward.any(axis=1)
         memory.waited = np.where(kept_waiting, memory.waited + 1, 0)

@@ -20,20 +20,13 @@ sight of it (a relay), round the shape (`swarmshape.strategies.routes`). A rim h
 stalled robots stand beside outside moves a step along the rim to where robots outside can
 reach it (`unwalled`).
 
-Carried outward, a hole comes out at the rim nearest it, which may face nobody: on the
-1,018-robot S (seeds 0 and 1) a hundred cells of the middle bar stood empty while the 155
-robots outside followed news of the same few rim cells round the shape in one file, and the
-runs took 1,997 and 1,795 steps. A robot in a pocket the shape encloses (a ring's middle)
-can come in only through the pocket's rim, where holes carried outward never go (the
-672-robot ring stopped 1 to 3 cells short on 5 of 10 seeds). So robots outside that wait
-with no empty cell in sight, beside the shape or in a pocket, pull: robots on the shape
-relay their moves to the nearest of them, neighbour to neighbour, and a robot in place that
-hears a pull carries a hole beside it one move nearer, not outward (`pulled`), whether
-robots outside could reach the hole or not, unless one on its way in is beside it. Counts
-fall by one a move, so a hole reaches a puller in as many moves as its count, and holes come
-out where robots wait: the S now takes 1,753 and 1,071 steps. A robot that has stood in
-place since before its shape last changed carries only holes robots outside cannot reach,
-so a live reshape moves no robot on a kept cell.
+A robot in a pocket the shape encloses (a ring's middle) can come in only through the
+pocket's rim, where holes, carried outward, never go: once the rim round it is full it waits
+for good (the 672-robot ring stopped 1 to 3 cells short on 5 of 10 seeds). Such a robot
+pulls: robots on the shape relay their hops to it, and a robot inside that hears a pull only
+carries a hole beside it one hop nearer the pocket, never outward (`pulled`). Hops fall by one
+a move, so a hole reaches the pocket in as many moves as its hops, and no two robots pass it
+back and forth.
 
 A piece of the shape that only pockets touch (a ring's dot, an eye in a face: `Shape.sealed`)
 fills from no robot outside, and from no hole carried to it. A robot in place that senses an
@@ -243,7 +236,7 @@ def _first_beside(
 
 def pulled(
     sense: Perception,
-    said: np.ndarray,
+    said: SimpleNamespace,
     view: View,
     cells: np.ndarray,
     pull: np.ndarray,
@@ -251,15 +244,14 @@ def pulled(
 ) -> np.ndarray:
     """``(n, 4)``: whether each robot is the one to move into the cell each way from its base
     (`cells` ``(n, 4, 2)``, relative to its own cell, in `STEPS` order), carrying a hole there
-    toward a robot waiting outside: it hears a `pull` (its moves to one; `said`, per entry,
-    its neighbours'), and of the robots it senses beside that cell it has the fewest moves to
-    one (the first in `STEPS` order of equals, counted from the cell, so that every robot
-    beside it agrees)."""
+    toward a robot waiting in a pocket: it hears a pull, and of the robots it senses beside
+    that cell it has the fewest hops to the pocket (the first in `STEPS` order of equals,
+    counted from the cell, so that every robot beside it agrees)."""
     n, ways = len(sense), STEPS[1:]
     rows = np.flatnonzero(pull < cap)  # the few that hear a pull: for the others, no way
     pull = pull[rows]
     # per entry, and a count never heard for none (a `who` of -1 picks the last)
-    heard = np.where(sense.heard & sense.kin & ~sense.seed, relay.heard(said), relay.NONE)
+    heard = np.where(sense.heard & sense.kin & ~sense.seed, relay.heard(said.pull), relay.NONE)
     heard = np.append(heard, relay.NONE)
     order = {tuple(way): index for index, way in enumerate(ways)}
     chosen = np.zeros((n, len(ways)), dtype=bool)
