@@ -157,14 +157,28 @@ def test_every_colour_on_the_arena_has_a_key_in_the_legend(strategy):
     swatches = {colour for key in keys for colour in key.colours}
     size, origin = renderer.fit(surface.get_rect())
     empty = ~swarm.filled & ~(swarm.cell[swarm.present][:, None] == world.targets).all(2).any(0)
-    centres = [
-        *swarm.positions()[swarm.present],
-        *(world.seeds + 0.5),
-        *(world.targets[empty] + 0.5),
-    ]
+    # a robot's colour at its square's corner (a ring's middle is clear), the others' centres
+    corners = swarm.positions()[swarm.present] - 0.5 + 1 / size
+    centres = [*corners, *(world.seeds + 0.5), *(world.targets[empty] + 0.5)]
     for centre in centres:
         pixel = (np.floor(centre * size) + origin).astype(int)
         assert surface.get_at(pixel.tolist())[:3] in swatches, (strategy, centre)
     assert {"stalled", "removed", "seed", "empty cell"} <= {key.name for key in keys}
     if not shown_of(swarm) or not shown_of(swarm).states:
         assert [key.name for key in keys][:4] == ["waiting", "moving", "settled", "wandering"]
+
+
+def test_a_spare_robot_is_a_ring_of_its_colour_and_the_legend_says_so():
+    """Waiting and wandering were two pale shades of one colour, hard to tell apart; a robot
+    with nothing to do is now a ring, under which its cell shows."""
+    world = build_world([GroupSpec("g", Shape(np.ones((2, 2), dtype=bool)), (200, 60, 60), 9)])
+    swarm = Swarm(world, create("optimal"), seed=2)
+    while not swarm.complete:
+        swarm.step()
+    spare = int(np.flatnonzero(swarm.state == State.WANDERING)[0])
+    surface, renderer = drawn(swarm)
+    square = renderer.cell_rect(tuple(swarm.cell[spare]), surface.get_rect()).inflate(-2, -2)
+    keys = {key.name: key for key in legend(swarm)}
+    assert surface.get_at(square.topleft)[:3] == (200, 60, 60) == keys["wandering"].colours[0]
+    assert surface.get_at(centre_of(square))[:3] == FLOOR
+    assert keys["wandering"].ring and not keys["waiting"].ring

@@ -2,7 +2,8 @@
 
 The world is scaled to whole pixels per cell and centred in the given area. Grey cells are the
 targets, green squares the seeds; agents take their group's colour, brightest while moving,
-slightly darker once settled, pale while waiting or wandering; stalled robots are charcoal, and
+slightly darker once settled, pale while waiting, a ring while wandering (a spare robot with
+nothing to do); stalled robots are charcoal, and
 where a fault removed robots a red cross shows for `LOST_MARK_STEPS` steps.
 
 A driver that names its robots' states (`Driver.shown`: a local program's ``memory.state``) has
@@ -22,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 import pygame
 
-from swarmshape.core.states import STALLED
+from swarmshape.core.states import STALLED, WANDERING
 from swarmshape.core.swarm import Shown, Swarm
 from swarmshape.core.world import World
 
@@ -70,21 +71,26 @@ SHADES = (  # indexed by State
     lambda rgb: tuple(int(c + (255 - c) * 0.55) for c in rgb),  # waiting: pale
     lambda rgb: rgb,  # moving: the group's colour
     lambda rgb: tuple(int(c * 0.62) for c in rgb),  # settled: darker
-    lambda rgb: tuple(int(c + (255 - c) * 0.35) for c in rgb),  # wandering: light
+    lambda rgb: rgb,  # wandering: a ring of the group's colour (`RING`)
     lambda rgb: STALLED_GREY,  # stalled: charcoal, whatever the group
     lambda rgb: rgb,  # lost: never drawn
 )
 SHADE_NAMES = ("waiting", "moving", "settled", "wandering")
 """What the first four `SHADES` show (stalled robots have one colour for every group)."""
+RING = WANDERING
+"""The state drawn as a ring, not a filled square: a second pale shade beside waiting's was
+hard to tell from it. Below `RING_MIN_SIDE` pixels a ring is a filled square."""
+RING_MIN_SIDE = 4
 
 
 class Key(NamedTuple):
     """One line of the legend: a name and its swatches (one per group where groups differ),
-    drawn as squares, or as the red cross that marks a removed robot."""
+    drawn as squares, as rings (`RING`), or as the red cross that marks a removed robot."""
 
     name: str
     colours: tuple[tuple[int, int, int], ...]
     cross: bool = False
+    ring: bool = False
 
 
 class Renderer:
@@ -93,7 +99,7 @@ class Renderer:
     def __init__(self, world: World) -> None:
         self.world = world
         self._background: pygame.Surface | None = None
-        self._squares: dict[tuple[int, tuple[int, int, int]], pygame.Surface] = {}
+        self._squares: dict[tuple[int, tuple[int, int, int], bool], pygame.Surface] = {}
         self._texts: dict[tuple[int, int, bool], pygame.Surface] = {}
 
     def fit(self, area: pygame.Rect) -> tuple[int, tuple[int, int]]:
@@ -135,13 +141,15 @@ class Renderer:
         corner = corner[here]
         shown = swarm.driver.shown()  # asked once a frame: a driver may work it out each time
         kind, colours = _colours(swarm, shown)
+        rings = [shown is None and index % len(SHADES) == RING for index in range(len(colours))]
         kind = kind[here]
         order = np.argsort(kind, kind="stable")
         bounds = np.searchsorted(kind[order], np.arange(len(colours) + 1))
         corners = corner[order].tolist()
-        for colour, (start, stop) in zip(colours, pairwise(bounds), strict=True):
+        looks = zip(colours, rings, pairwise(bounds), strict=True)
+        for colour, ring, (start, stop) in looks:
             if start < stop:  # one blit call per colour draws all its squares
-                square = self._square(cell - 2 * gap, colour)
+                square = self._square(cell - 2 * gap, colour, ring)
                 surface.fblits(zip(repeat(square), corners[start:stop]))
         if shown is None or not overlays:
             return
@@ -270,14 +278,25 @@ class Renderer:
         self._background = background
         return background
 
-    def _square(self, side: int, colour: tuple[int, int, int]) -> pygame.Surface:
-        """A filled square of one colour, made once."""
-        key = (side, colour)
+    def _square(self, side: int, colour: tuple[int, int, int], ring: bool) -> pygame.Surface:
+        """A square of one colour, filled or a `ring` (what lies under it shows through), made
+        once."""
+        key = (side, colour, ring)
         if key not in self._squares:
-            square = pygame.Surface((max(1, side), max(1, side)))
-            square.fill(colour)
-            self._squares[key] = square
+            self._squares[key] = square_of(max(1, side), colour, ring)
         return self._squares[key]
+
+
+def square_of(side: int, colour: tuple[int, int, int], ring: bool = False) -> pygame.Surface:
+    """A `side`-pixel square of `colour`, filled, or a `ring` a quarter of its side wide with
+    a clear middle (filled below `RING_MIN_SIDE`)."""
+    if not ring or side < RING_MIN_SIDE:
+        square = pygame.Surface((side, side))
+        square.fill(colour)
+        return square
+    square = pygame.Surface((side, side), pygame.SRCALPHA)
+    pygame.draw.rect(square, colour, square.get_rect(), max(1, side // 4))
+    return square
 
 
 def shown_of(swarm: Swarm | None) -> Shown | None:
@@ -302,8 +321,8 @@ def legend(swarm: Swarm) -> list[Key]:
     else:
         groups = [group.colour for group in swarm.world.groups]
         keys = [
-            Key(name, tuple(dict.fromkeys(shade(colour) for colour in groups)))
-            for name, shade in zip(SHADE_NAMES, SHADES, strict=False)
+            Key(name, tuple(dict.fromkeys(shade(colour) for colour in groups)), ring=state == RING)
+            for state, (name, shade) in enumerate(zip(SHADE_NAMES, SHADES, strict=False))
         ]
     return [
         *keys,

@@ -43,6 +43,7 @@ from swarmshape.ui.render import (
     font_of,
     legend,
     shown_of,
+    square_of,
 )
 
 FAULT_EVENTS = (pygame.MOUSEBUTTONDOWN, pygame.MOUSEMOTION, pygame.MOUSEBUTTONUP)
@@ -520,8 +521,8 @@ class Viewer:
         return rows
 
     def _keys(self, keys: list[Key], y: int) -> None:
-        """One row of the legend: each key's swatches (a square per colour, or a red cross on
-        the floor for removed robots) and its name."""
+        """One row of the legend: each key's swatches (a square or ring per colour, or a red
+        cross on the floor for removed robots) and its name."""
         side, x = self._swatch(), HUD_PAD
         top = y + (self.font.get_linesize() - side) // 2
         for key in keys:
@@ -533,7 +534,8 @@ class Viewer:
                     pygame.draw.line(self.screen, colour, inner.topleft, inner.bottomright, 2)
                     pygame.draw.line(self.screen, colour, inner.bottomleft, inner.topright, 2)
                 else:
-                    self.screen.fill(colour, square)
+                    self.screen.fill(FLOOR, square)
+                    self.screen.blit(square_of(side, colour, key.ring), square)
                 x += side + 2
             self._text(key.name, (x + 3, y), HUD_TEXT)
             x += 3 + self.font.size(key.name)[0] + self.font.size(GAP)[0]
