@@ -65,27 +65,24 @@ def _mark(
     """`View`'s squares in one pass over the entries, then one over those coming: a dozen
     numpy passes over a 10,000-robot swarm's 190,000 entries cost `mean-shift` a sixth of its
     step. An entry marks its cell, and then its cell ahead if it is under way; a later mark on
-    the same cell wins."""
-    for entry in range(len(owner)):
+    the same cell wins. The marks are written here, not by a kernel called per mark: that
+    call counts references to the arrays passed to it, and made the pass three times as slow
+    (2.5 ms against 0.7 ms at step 100 of `mean-shift` on the 10,000-robot S)."""
+    m = len(owner)
+    for entry in range(m):
         robot = owner[entry]
         for axis in range(2):
             own = progress[robot] * STEPS[heading[robot], axis]
             cells[entry, axis] = np.int64(np.rint(offset[entry, axis] + own))
-        _put(taken, who, robot, cells[entry, 0], cells[entry, 1], reach, entry)
-    for entry in range(len(owner)):
-        if coming[entry] > 0:
-            x = cells[entry, 0] + STEPS[coming[entry], 0]
-            y = cells[entry, 1] + STEPS[coming[entry], 1]
-            _put(taken, who, owner[entry], x, y, reach, entry)
-
-
-@njit
-def _put(
-    taken: np.ndarray, who: np.ndarray, robot: int, x: int, y: int, reach: int, entry: int
-) -> None:  # pragma: no cover (compiled)
-    if abs(x) <= reach and abs(y) <= reach:
-        taken[robot, x + reach + 1, y + reach + 1] = True
-        who[robot, x + reach + 1, y + reach + 1] = entry
+    for k in range(2 * m):  # every entry's cell, then the cell ahead of each one coming
+        entry = k % m
+        way = coming[entry] if k >= m else 0
+        if k >= m and way <= 0:
+            continue
+        x, y = cells[entry, 0] + STEPS[way, 0], cells[entry, 1] + STEPS[way, 1]
+        if abs(x) <= reach and abs(y) <= reach:
+            taken[owner[entry], x + reach + 1, y + reach + 1] = True
+            who[owner[entry], x + reach + 1, y + reach + 1] = entry
 
 
 @njit
