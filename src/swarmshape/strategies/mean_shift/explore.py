@@ -25,6 +25,7 @@ import functools
 import numpy as np
 import scipy
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.local import Memory
 from swarmshape.core.motion import LEFT, REVERSE, RIGHT, STEPS
 from swarmshape.core.perception import Blueprint, Perception
@@ -305,26 +306,38 @@ def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:
     short one way as the opposite way, the two cancel; the robot takes the first of them by
     direction number, or it stood there for good (a 12-cell shape, the robot right above the
     seeds, 92 % for 20,000 steps: ``swarmshape check mean-shift --seed 100``)."""
-    xi = grey(sense.blueprint, sense.group, cells)
-    down = np.zeros((len(cells), 2))
-    first = np.zeros((len(cells), 2))
-    for step in STEPS[1:][::-1]:
-        lower = grey(sense.blueprint, sense.group, cells + step) < xi
-        down += lower[:, None] * step
-        first[lower] = step
+    xi = grey(sense.blueprint, sense.group, cells[:, None] + STEPS)  # its cell, each move's
+    lower = xi[:, 1:] < xi[:, :1]
+    down = (lower @ STEPS[1:]).astype(np.float64)
+    first = np.where(lower.any(axis=1)[:, None], STEPS[1 + np.argmax(lower, axis=1)], 0)
     down = np.where((down == 0).all(axis=1)[:, None], first, down)
-    return unit(down) * np.minimum(xi / band, 1.0)[:, None]
+    return unit(down) * np.minimum(xi[:, 0] / band, 1.0)[:, None]
 
 
 def grey(blueprint: Blueprint, groups: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """Each frame cell's grey level ``xi``: the fewest moves from it to a cell of its group's
-    shape, round the seeds (0 on the shape; the paper's grey image, one level a cell)."""
-    xi = np.zeros(len(cells), dtype=np.int64)
+    shape, round the seeds (0 on the shape; the paper's grey image, one level a cell). Per
+    robot, one cell ``(n, 2)`` or several ``(n, k, 2)``."""
+    xi = np.zeros(cells.shape[:-1], dtype=np.int64)
     for group, (low, field) in enumerate(_grey_fields(blueprint)):
         mine = np.flatnonzero(groups == group)
-        at = np.clip(cells[mine] - low, 0, np.array(field.shape) - 1)
-        xi[mine] = field[at[:, 0], at[:, 1]] + np.abs(cells[mine] - low - at).sum(axis=1)
+        _levels(field, low, cells.reshape(len(cells), -1, 2), mine, xi.reshape(len(cells), -1))
     return xi
+
+
+@njit
+def _levels(
+    field: np.ndarray, low: np.ndarray, cells: np.ndarray, rows: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover (compiled)
+    """`grey` of the robots `rows` of one group, cell by cell: a cell off the field's box is its
+    nearest box cell's level plus the way to it. numpy's clip, gather and sums over a
+    10,000-robot swarm, five times a step, cost `mean-shift` a tenth of its step."""
+    top_x, top_y = field.shape[0] - 1, field.shape[1] - 1
+    for i in rows:
+        for j in range(cells.shape[1]):
+            x, y = cells[i, j, 0] - low[0], cells[i, j, 1] - low[1]
+            at_x, at_y = min(max(x, 0), top_x), min(max(y, 0), top_y)
+            out[i, j] = field[at_x, at_y] + abs(x - at_x) + abs(y - at_y)
 
 
 @functools.lru_cache(maxsize=4)
