@@ -37,18 +37,40 @@ def waypoints(
     out = target.copy()
     for _, rows, low, size, fields, which in _grouped(blueprint, groups, target):
         at = frame[rows] - low
-        for _ in range(ahead):
-            here = _distance(fields, which, at, size)
-            best, step = here, np.zeros(len(rows), dtype=np.int64)
-            for direction in range(1, len(STEPS)):
-                there = _distance(fields, which, at + STEPS[direction], size)
-                better = there < best
-                best, step = np.where(better, there, best), np.where(better, direction, step)
-            at = at + STEPS[step]
-        reached = np.isfinite(_distance(fields, which, at, size))
+        reached = _walk(fields, which, at, size[0], size[1], ahead)
         found[rows] = reached
         out[rows[reached]] = at[reached] + low
     return out, found
+
+
+@njit
+def _walk(
+    fields: np.ndarray, which: np.ndarray, at: np.ndarray, rows: int, columns: int, ahead: int
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`waypoints` robot by robot: each cell `at` ``(k, 2)`` (box coordinates), moved in place
+    `ahead` steps down its field `which`, each to the neighbour of least cost, the first of
+    equals in move order (none if none costs less than its cell); whether each ends on a cell
+    with a route. Five numpy lookups a step, over every robot, cost `local-swap` 3 ms a step
+    at 10,000 robots."""
+
+    def cost(field: np.ndarray, x: int, y: int) -> float:
+        return field[x * columns + y] if 0 <= x < rows and 0 <= y < columns else np.inf
+
+    reached = np.empty(len(at), dtype=np.bool_)
+    for i in range(len(at)):
+        field = fields[which[i]]
+        x, y = at[i, 0], at[i, 1]
+        best = cost(field, x, y)  # the cost of the cell it is on
+        for _ in range(ahead):
+            step = 0
+            for direction in range(1, len(STEPS)):
+                there = cost(field, x + STEPS[direction, 0], y + STEPS[direction, 1])
+                if there < best:
+                    step, best = direction, there
+            x, y = x + STEPS[step, 0], y + STEPS[step, 1]
+        at[i, 0], at[i, 1] = x, y
+        reached[i] = np.isfinite(best)
+    return reached
 
 
 def costs(
