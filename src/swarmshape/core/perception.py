@@ -64,6 +64,7 @@ class Blueprint:
     """Per group, its shape's frame cells ``(k, 2)`` in row-major order (the same list every
     robot of the group holds)."""
     _numbers: Boxes = field(repr=False)
+    _inside: Boxes = field(repr=False)
     _digests: np.ndarray = field(repr=False)
 
     @classmethod
@@ -76,7 +77,10 @@ class Blueprint:
             grid[cells[:, 0] - low[0], cells[:, 1] - low[1]] = np.arange(len(cells))
             boxes.append((low, grid))
         digests = [zlib.crc32(np.ascontiguousarray(c, dtype=np.int64).data) for c in frame_cells]
-        return cls(tuple(frame_cells), _numbers=Boxes(boxes), _digests=np.array(digests))
+        inside = Boxes([(low, grid >= 0) for low, grid in boxes])
+        return cls(
+            tuple(frame_cells), _numbers=Boxes(boxes), _inside=inside, _digests=np.array(digests)
+        )
 
     def digest(self, groups: np.ndarray) -> np.ndarray:
         """A checksum of each entry's group's shape (CRC-32 of its cells, not negative): a robot
@@ -99,6 +103,12 @@ class Blueprint:
         """`number` over the square of half-width `reach` round each frame cell ``(k, 2)``:
         ``(k, side, side)``, the frame cell at ``[reach, reach]`` (see `Boxes.around`)."""
         return self._numbers.around(groups, frame, reach)
+
+    def contains_around(self, groups: np.ndarray, frame: np.ndarray, reach: int) -> np.ndarray:
+        """`contains` over the square of half-width `reach` round each frame cell ``(k, 2)``,
+        as `number_around` lays it out: a byte a cell, not the eight of a number, which made
+        `mean-shift`'s squares at 10,000 robots cost it 3 ms a step, not 0.5."""
+        return self._inside.around(groups, frame, reach)
 
     def cell(self, groups: np.ndarray, numbers: np.ndarray) -> np.ndarray:
         """The frame cell numbered `numbers` (row-major) in each entry's group's shape."""

@@ -37,7 +37,7 @@ class Around:
 
     def __init__(self, blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, reach: int):
         self.reach = reach
-        self.inside = blueprint.number_around(groups, frame, reach) >= 0
+        self.inside = blueprint.contains_around(groups, frame, reach)
         """Per robot ``(n, side, side)``, its frame cell in the middle: in its shape or not."""
         self.depths = _depths(blueprint).around(groups, frame, reach)
         """The same square's `depth`s, for a compiled pass that looks up many (`_at`)."""
