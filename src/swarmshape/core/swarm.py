@@ -21,6 +21,7 @@ from swarmshape.core.audit import new_scratch, overlaps
 from swarmshape.core.compiled import njit
 from swarmshape.core.faults import Faults
 from swarmshape.core.guard import PluginCode
+from swarmshape.core.heap import keep_freed_memory
 from swarmshape.core.lattice import FREE, SEED, WALL, Lattice
 from swarmshape.core.motion import STEPS, Limits, move, positions, resolve_claims
 from swarmshape.core.options import TEXT, option, spec_of
@@ -205,6 +206,7 @@ class Swarm:
 
     def _take(self, world: World, plugin: Plugin, seed: int, params: Params) -> None:
         """What a swarm is given, whether it starts afresh or resumes."""
+        keep_freed_memory()  # a step's large arrays reused, not faulted in again (`heap`)
         self.world = world
         self.plugin = plugin
         self._code = PluginCode.of(plugin)
