@@ -45,7 +45,7 @@ from swarmshape.core.options import option
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.strategies import register
 from swarmshape.strategies.skills.localise import roam
-from swarmshape.strategies.skills.view import SILENCE, paths
+from swarmshape.strategies.skills.view import SILENCE, distances
 
 START, WAIT, WANDER, OUTSIDE, INSIDE, JOINED, STOPPED = range(7)
 STATES = ("start", "wait", "wander", "outside", "inside", "joined", "stopped")
@@ -598,7 +598,7 @@ def _reach_beside(walls: np.ndarray) -> np.ndarray:
     for d in range(1, 5):
         start = np.zeros((a, 5, 5), dtype=bool)
         start[:, 2 + STEPS[d, 1], 2 + STEPS[d, 0]] = True
-        reach[:, d - 1] = (paths(~free, start & free)[0] >= 0).reshape(a, 25)
+        reach[:, d - 1] = (distances(~free, start & free) >= 0).reshape(a, 25)
     return reach
 
 
