@@ -38,7 +38,7 @@ from swarmshape.strategies.skills.view import View, distances
 def base(sense: Perception) -> np.ndarray:
     """Each robot's base relative to its own cell ``(n, 2)``: its next cell when it is under
     way with only that one reserved (it may go on from there), else its own cell."""
-    return np.where(sense.cruising[:, None], STEPS[sense.heading], 0)
+    return np.where(sense.cruising[:, None], np.take(STEPS, sense.heading, axis=0), 0)
 
 
 class Window:
@@ -314,7 +314,7 @@ def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:
     xi = grey(sense.blueprint, sense.group, cells[:, None] + STEPS)  # its cell, each move's
     lower = xi[:, 1:] < xi[:, :1]
     down = (lower @ STEPS[1:]).astype(np.float64)
-    first = np.where(lower.any(axis=1)[:, None], STEPS[1 + np.argmax(lower, axis=1)], 0)
+    first = np.take(STEPS, np.where(lower.any(axis=1), 1 + np.argmax(lower, axis=1), 0), axis=0)
     down = np.where((down == 0).all(axis=1)[:, None], first, down)
     return unit(down) * np.minimum(xi[:, 0] / band, 1.0)[:, None]
 

@@ -66,7 +66,8 @@ def localise(sense: Perception, memory: Memory, said: SimpleNamespace) -> None:
 
     Compiled (`_localise`): as a dozen numpy passes over every entry it cost `mean-shift` a
     fifth of its step at 5,000 robots."""
-    memory.frame[memory.localised] += sense.moved[memory.localised]
+    # not a masked add: numpy 2.4 copies a 2-D array's masked rows one by one, 5 times slower
+    memory.frame += np.where(memory.localised[:, None], sense.moved, 0)
     found, memory.anchor = _localise(
         sense.start, sense.offset, sense.progress, sense.heading, sense.seed, sense.seed_frame,
         sense.heard & sense.kin, said.cell, said.heading, said.progress, said.localised,
