@@ -261,10 +261,6 @@ def test_letter_s_runs_that_once_stopped_short_form(cells, seed, faults, steps):
         # went on passing open cells toward the rim, emptying a cell each time
         # (`_relay_spares`).
         pytest.param(123, id="short-of-robots"),
-        # The same, within the life of the last spare's news (`_current`): the shape formed
-        # with five cells open and two robots beside one passed it on four steps later. A
-        # robot that may still pass an open cell beside it is not done (`LocalSwap.finished`).
-        pytest.param(8007, id="short-of-robots-while-news-lives"),
     ],
 )
 def test_fuzzed_cases_that_once_broke_an_invariant(number):

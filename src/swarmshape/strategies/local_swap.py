@@ -143,7 +143,6 @@ class LocalSwap(Program):
         "blocked_way": Slot(np.int64, 0),
         "detour": Slot(np.int64, 0),
         "at_goal": Slot(bool, False),
-        "done": Slot(bool, False, added=True),
         "asked": Slot(np.int64, 0),
         "unaware": Slot(np.int64, 0),
         "roam": Slot(np.int64, 0),
@@ -217,11 +216,6 @@ class LocalSwap(Program):
         target[memory.has_goal] = memory.goal[memory.has_goal]
         has_goal = memory.localised & memory.has_goal
         memory.at_goal = has_goal & _same(memory.frame, memory.goal)
-        # at its goal, but not done while it may pass an open cell beside it on to a spare it
-        # has news of: once the last spare of a shape short of robots took a cell, its news
-        # lived on (`_current`), and the robots beside the open cells left passed them on
-        # after the shape had formed, losing a cell (fuzz case 8007)
-        memory.done = memory.at_goal & ~(passing & _open_beside(sense, memory, occupied))
         going = (has_goal | seeking) & ~_same(memory.frame, target)
         same_aim = _same(target, memory.aim)
         _note_progress(memory, target)
@@ -288,7 +282,7 @@ class LocalSwap(Program):
         return moves, messages
 
     def finished(self, memory: Memory) -> np.ndarray:
-        return memory.done
+        return memory.at_goal
 
     def estimate(self, memory: Memory) -> tuple[np.ndarray, np.ndarray]:
         return memory.localised, memory.frame
@@ -965,16 +959,6 @@ def _deeper(
         better = ~occupied[:, direction] & ~held[:, direction] & (there > best)
         best, way = np.where(better, there, best), np.where(better, direction, way)
     return np.where(inside, way, 0)
-
-
-def _open_beside(sense: Perception, memory: Memory, occupied: np.ndarray) -> np.ndarray:
-    """Whether a cell of its shape one step from each robot is open (nothing sits there)."""
-    depth = _depth(sense.blueprint)
-    found = np.zeros(len(sense), dtype=bool)
-    for direction in range(1, len(STEPS)):
-        inside = depth.at(sense.group, memory.frame + STEPS[direction]) > 0
-        found |= inside & ~occupied[:, direction]
-    return found
 
 
 @njit
