@@ -181,6 +181,20 @@ def test_a_run_left_short_of_robots_while_forming_ends_with_its_open_cells_count
     assert "0 stalled (12 cells left open: too few robots), 1 recovered" in summary_line(metrics)
 
 
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_one_robot_left_alone_by_a_fault_goes_on(strategy):
+    """Every robot but one removed while the shape forms: the last one senses nobody (no
+    entry at all), and a program that looked up a neighbour's message for the robots it
+    does not hear indexed an empty array (`mean-shift`, found by a review at stop 64)."""
+    world = world_of(BLOCK)
+    faults = Faults((FaultEvent(10, "remove", len(world.targets) - 1),))
+    swarm = Swarm(world, create(strategy), 1, faults=faults)
+    watch = InvariantWatch()
+    Runner(swarm, [watch], max_steps=5_000).finish()
+    assert watch.problems == [] and swarm.present.sum() == 1
+    assert swarm.complete, "the one robot left rests on a cell of the shape"
+
+
 def test_a_smaller_copy_that_stalled_robots_wall_off_is_not_chosen():
     """Hypothesis found this run: after the third fault the survivors were re-formed as a 2x2
     copy whose cells stalled robots held or (one coasting into place) walled off beside the

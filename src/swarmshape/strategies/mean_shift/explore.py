@@ -191,8 +191,9 @@ def round_the_silent(
     (`go_round`). Aiming at the waypoint still, a robot in a bay of stalled robots stepped
     aside and back for good (`fuzz_programs.py mean-shift`, case 5)."""
     frame = memory.frame[robots]
-    entry = np.maximum(view.who[robots], 0)
-    silent = (view.who[robots] >= 0) & ~sense.heard[entry] & ~sense.seed[entry]
+    # per entry, and not silent for none (a `who` of -1 picks the last): with no entry at
+    # all (faults left a robot alone) there is nothing else to pick
+    silent = np.append(~sense.heard & ~sense.seed, False)[view.who[robots]]
     walls = seeded(silent, frame)
     start, r, offsets = base(sense)[robots], view.reach, window.offsets
     goal = (offsets[None] == (way - frame)[:, None]).all(axis=2)
