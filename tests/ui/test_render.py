@@ -13,6 +13,7 @@ from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.strategies import create
 from swarmshape.ui.render import (
+    BORDER_MIN_SIDE,
     ERROR_RED,
     FLOOR,
     PALETTE,
@@ -22,6 +23,7 @@ from swarmshape.ui.render import (
     Renderer,
     legend,
     shown_of,
+    square_of,
 )
 from tests.conftest import grid_from, make_swarm
 
@@ -154,10 +156,10 @@ def test_every_colour_on_the_arena_has_a_key_in_the_legend(strategy):
     swarm.fail(np.array([1]), "remove")
     surface, renderer = drawn(swarm)
     keys = legend(swarm)
-    swatches = {colour for key in keys for colour in key.colours}
+    swatches = {colour for key in keys for colour in (*key.colours, *key.borders)}
     size, origin = renderer.fit(surface.get_rect())
     empty = ~swarm.filled & ~(swarm.cell[swarm.present][:, None] == world.targets).all(2).any(0)
-    # a robot's colour at its square's corner (a ring's middle is clear), the others' centres
+    # a robot's colour at its square's corner (a border, for a spare one), the others' centres
     corners = swarm.positions()[swarm.present] - 0.5 + 1 / size
     centres = [*corners, *(world.seeds + 0.5), *(world.targets[empty] + 0.5)]
     for centre in centres:
@@ -168,9 +170,10 @@ def test_every_colour_on_the_arena_has_a_key_in_the_legend(strategy):
         assert [key.name for key in keys][:4] == ["waiting", "moving", "settled", "wandering"]
 
 
-def test_a_spare_robot_is_a_ring_of_its_colour_and_the_legend_says_so():
+def test_a_spare_robot_has_a_border_of_its_colour_and_the_legend_says_so():
     """Waiting and wandering were two pale shades of one colour, hard to tell apart; a robot
-    with nothing to do is now a ring, under which its cell shows."""
+    with nothing to do now has a border of its group's full colour round its paler shade, and
+    where squares are too small for a border, that shade still tells it from a moving one."""
     world = build_world([GroupSpec("g", Shape(np.ones((2, 2), dtype=bool)), (200, 60, 60), 9)])
     swarm = Swarm(world, create("optimal"), seed=2)
     while not swarm.complete:
@@ -179,6 +182,10 @@ def test_a_spare_robot_is_a_ring_of_its_colour_and_the_legend_says_so():
     surface, renderer = drawn(swarm)
     square = renderer.cell_rect(tuple(swarm.cell[spare]), surface.get_rect()).inflate(-2, -2)
     keys = {key.name: key for key in legend(swarm)}
-    assert surface.get_at(square.topleft)[:3] == (200, 60, 60) == keys["wandering"].colours[0]
-    assert surface.get_at(centre_of(square))[:3] == FLOOR
-    assert keys["wandering"].ring and not keys["waiting"].ring
+    wandering, waiting = keys["wandering"], keys["waiting"]
+    assert surface.get_at(square.topleft)[:3] == (200, 60, 60) == wandering.borders[0]
+    assert surface.get_at(centre_of(square))[:3] == wandering.colours[0]
+    assert wandering.colours[0] not in (waiting.colours[0], keys["moving"].colours[0], FLOOR)
+    assert not waiting.borders
+    tiny = square_of(BORDER_MIN_SIDE - 1, wandering.colours[0], wandering.borders[0])
+    assert {tiny.get_at((x, y))[:3] for x in range(3) for y in range(3)} == {wandering.colours[0]}

@@ -2,8 +2,8 @@
 
 The world is scaled to whole pixels per cell and centred in the given area. Grey cells are the
 targets, green squares the seeds; agents take their group's colour, brightest while moving,
-slightly darker once settled, pale while waiting, a ring while wandering (a spare robot with
-nothing to do); stalled robots are charcoal, and
+slightly darker once settled, pale while waiting, paler with a border of the full colour while
+wandering (a spare robot with nothing to do); stalled robots are charcoal, and
 where a fault removed robots a red cross shows for `LOST_MARK_STEPS` steps.
 
 A driver that names its robots' states (`Driver.shown`: a local program's ``memory.state``) has
@@ -26,6 +26,8 @@ import pygame
 from swarmshape.core.states import STALLED, WANDERING
 from swarmshape.core.swarm import Shown, Swarm
 from swarmshape.core.world import World
+
+Colour = tuple[int, int, int]
 
 FLOOR = (250, 250, 247)
 OUTSIDE = (222, 222, 216)
@@ -71,26 +73,28 @@ SHADES = (  # indexed by State
     lambda rgb: tuple(int(c + (255 - c) * 0.55) for c in rgb),  # waiting: pale
     lambda rgb: rgb,  # moving: the group's colour
     lambda rgb: tuple(int(c * 0.62) for c in rgb),  # settled: darker
-    lambda rgb: rgb,  # wandering: a ring of the group's colour (`RING`)
+    lambda rgb: tuple(int(c + (255 - c) * 0.35) for c in rgb),  # wandering: light (`BORDERED`)
     lambda rgb: STALLED_GREY,  # stalled: charcoal, whatever the group
     lambda rgb: rgb,  # lost: never drawn
 )
 SHADE_NAMES = ("waiting", "moving", "settled", "wandering")
 """What the first four `SHADES` show (stalled robots have one colour for every group)."""
-RING = WANDERING
-"""The state drawn as a ring, not a filled square: a second pale shade beside waiting's was
-hard to tell from it. Below `RING_MIN_SIDE` pixels a ring is a filled square."""
-RING_MIN_SIDE = 4
+BORDERED = WANDERING
+"""The state drawn with a border of its group's full colour round its shade: its pale shade
+alone was hard to tell from waiting's. Below `BORDER_MIN_SIDE` pixels a square has no border,
+and its shade alone still tells it from a moving robot."""
+BORDER_MIN_SIDE = 4
 
 
 class Key(NamedTuple):
     """One line of the legend: a name and its swatches (one per group where groups differ),
-    drawn as squares, as rings (`RING`), or as the red cross that marks a removed robot."""
+    drawn as squares (with `borders`, one per swatch, if any: `BORDERED`), or as the red cross
+    that marks a removed robot."""
 
     name: str
     colours: tuple[tuple[int, int, int], ...]
     cross: bool = False
-    ring: bool = False
+    borders: tuple[tuple[int, int, int], ...] = ()
 
 
 class Renderer:
@@ -99,7 +103,7 @@ class Renderer:
     def __init__(self, world: World) -> None:
         self.world = world
         self._background: pygame.Surface | None = None
-        self._squares: dict[tuple[int, tuple[int, int, int], bool], pygame.Surface] = {}
+        self._squares: dict[tuple[int, Colour, Colour | None], pygame.Surface] = {}
         self._texts: dict[tuple[int, int, bool], pygame.Surface] = {}
 
     def fit(self, area: pygame.Rect) -> tuple[int, tuple[int, int]]:
@@ -140,16 +144,15 @@ class Renderer:
         self._lost_marks(surface, swarm, cell, origin)
         corner = corner[here]
         shown = swarm.driver.shown()  # asked once a frame: a driver may work it out each time
-        kind, colours = _colours(swarm, shown)
-        rings = [shown is None and index % len(SHADES) == RING for index in range(len(colours))]
+        kind, colours, borders = _colours(swarm, shown)
         kind = kind[here]
         order = np.argsort(kind, kind="stable")
         bounds = np.searchsorted(kind[order], np.arange(len(colours) + 1))
         corners = corner[order].tolist()
-        looks = zip(colours, rings, pairwise(bounds), strict=True)
-        for colour, ring, (start, stop) in looks:
+        looks = zip(colours, borders, pairwise(bounds), strict=True)
+        for colour, border, (start, stop) in looks:
             if start < stop:  # one blit call per colour draws all its squares
-                square = self._square(cell - 2 * gap, colour, ring)
+                square = self._square(cell - 2 * gap, colour, border)
                 surface.fblits(zip(repeat(square), corners[start:stop]))
         if shown is None or not overlays:
             return
@@ -278,24 +281,21 @@ class Renderer:
         self._background = background
         return background
 
-    def _square(self, side: int, colour: tuple[int, int, int], ring: bool) -> pygame.Surface:
-        """A square of one colour, filled or a `ring` (what lies under it shows through), made
-        once."""
-        key = (side, colour, ring)
+    def _square(self, side: int, colour: Colour, border: Colour | None) -> pygame.Surface:
+        """A square of one colour, with a `border` if given (see `square_of`), made once."""
+        key = (side, colour, border)
         if key not in self._squares:
-            self._squares[key] = square_of(max(1, side), colour, ring)
+            self._squares[key] = square_of(max(1, side), colour, border)
         return self._squares[key]
 
 
-def square_of(side: int, colour: tuple[int, int, int], ring: bool = False) -> pygame.Surface:
-    """A `side`-pixel square of `colour`, filled, or a `ring` a quarter of its side wide with
-    a clear middle (filled below `RING_MIN_SIDE`)."""
-    if not ring or side < RING_MIN_SIDE:
-        square = pygame.Surface((side, side))
-        square.fill(colour)
-        return square
-    square = pygame.Surface((side, side), pygame.SRCALPHA)
-    pygame.draw.rect(square, colour, square.get_rect(), max(1, side // 4))
+def square_of(side: int, colour: Colour, border: Colour | None = None) -> pygame.Surface:
+    """A `side`-pixel square of `colour`, with a `border` a quarter of its side wide if given
+    (none below `BORDER_MIN_SIDE`)."""
+    square = pygame.Surface((side, side))
+    square.fill(colour)
+    if border is not None and side >= BORDER_MIN_SIDE:
+        pygame.draw.rect(square, border, square.get_rect(), side // 4)
     return square
 
 
@@ -320,10 +320,11 @@ def legend(swarm: Swarm) -> list[Key]:
         keys = [Key(name, (colour,)) for name, colour in named]
     else:
         groups = [group.colour for group in swarm.world.groups]
-        keys = [
-            Key(name, tuple(dict.fromkeys(shade(colour) for colour in groups)), ring=state == RING)
-            for state, (name, shade) in enumerate(zip(SHADE_NAMES, SHADES, strict=False))
-        ]
+        keys = []
+        for state, (name, shade) in enumerate(zip(SHADE_NAMES, SHADES, strict=False)):
+            looks = dict.fromkeys((shade(colour), colour) for colour in groups)  # one per look
+            borders = tuple(border for _, border in looks) if state == BORDERED else ()
+            keys.append(Key(name, tuple(colour for colour, _ in looks), borders=borders))
     return [
         *keys,
         Key("stalled", (STALLED_GREY,)),
@@ -333,17 +334,24 @@ def legend(swarm: Swarm) -> list[Key]:
     ]
 
 
-def _colours(swarm: Swarm, shown: Shown | None) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
-    """Each robot's colour index and the colours: by the states the driver `shown` names (a
-    local program's ``memory.state``), else its group's colour shaded by what it is doing
-    (stalled robots are charcoal either way)."""
+def _colours(
+    swarm: Swarm, shown: Shown | None
+) -> tuple[np.ndarray, list[Colour], list[Colour | None]]:
+    """Each robot's colour index, the colours, and a border for each (None: none): by the
+    states the driver `shown` names (a local program's ``memory.state``), else its group's
+    colour shaded by what it is doing, with a border of that colour for `BORDERED` (stalled
+    robots are charcoal either way)."""
     named = _named_states(shown)
     if shown is not None and shown.state is not None:
         colours = [colour for _, colour in named] + [STALLED_GREY]
         kind = shown.state % len(named)
-        return np.where(swarm.state == STALLED, len(named), kind), colours
-    colours = [shade(g.colour) for g in swarm.world.groups for shade in SHADES]
-    return swarm.group * len(SHADES) + swarm.state, colours
+        return np.where(swarm.state == STALLED, len(named), kind), colours, [None] * len(colours)
+    groups = [g.colour for g in swarm.world.groups]
+    colours = [shade(colour) for colour in groups for shade in SHADES]
+    borders = [
+        colour if state == BORDERED else None for colour in groups for state in range(len(SHADES))
+    ]
+    return swarm.group * len(SHADES) + swarm.state, colours, borders
 
 
 def frame(

@@ -521,12 +521,12 @@ class Viewer:
         return rows
 
     def _keys(self, keys: list[Key], y: int) -> None:
-        """One row of the legend: each key's swatches (a square or ring per colour, or a red
-        cross on the floor for removed robots) and its name."""
+        """One row of the legend: each key's swatches (a square per colour, bordered as robots
+        are, or a red cross on the floor for removed robots) and its name."""
         side, x = self._swatch(), HUD_PAD
         top = y + (self.font.get_linesize() - side) // 2
         for key in keys:
-            for colour in key.colours:
+            for index, colour in enumerate(key.colours):
                 square = pygame.Rect(x, top, side, side)
                 if key.cross:
                     self.screen.fill(FLOOR, square)
@@ -534,8 +534,8 @@ class Viewer:
                     pygame.draw.line(self.screen, colour, inner.topleft, inner.bottomright, 2)
                     pygame.draw.line(self.screen, colour, inner.bottomleft, inner.topright, 2)
                 else:
-                    self.screen.fill(FLOOR, square)
-                    self.screen.blit(square_of(side, colour, key.ring), square)
+                    border = key.borders[index] if key.borders else None
+                    self.screen.blit(square_of(side, colour, border), square)
                 x += side + 2
             self._text(key.name, (x + 3, y), HUD_TEXT)
             x += 3 + self.font.size(key.name)[0] + self.font.size(GAP)[0]
