@@ -8,13 +8,15 @@ its heap; it raises both thresholds by itself, but only once it has unmapped a b
 seed, say): a process where it had not faulted 2,400 to 4,000 pages back in every step, 5 to
 9 ms of `mean-shift`'s 30 ms step on the 10,000-robot S. Set where glibc raises them at most,
 every process runs as the lucky ones did. Elsewhere (another C library, another system) this
-does nothing.
+does nothing, and so it does where the user set glibc's thresholds (`OWN_SETTINGS`): theirs
+win, and setting them to glibc's defaults turns this off.
 """
 
 from __future__ import annotations
 
 import ctypes
 import functools
+import os
 import sys
 
 M_TRIM_THRESHOLD = -1
@@ -23,12 +25,19 @@ M_MMAP_THRESHOLD = -3
 MMAP_THRESHOLD = 32 << 20
 """The most glibc raises its mmap threshold to by itself on 64-bit systems; it then keeps
 twice as much free at the top of its heap."""
+OWN_SETTINGS = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_")
+"""The environment variables by which a user sets glibc's thresholds (as does
+``GLIBC_TUNABLES=glibc.malloc.mmap_threshold=...``)."""
 
 
 @functools.cache
 def keep_freed_memory() -> None:
-    """Set glibc's thresholds (once a process) as high as it raises them itself."""
-    if not sys.platform.startswith("linux"):
+    """Set glibc's thresholds (once a process) as high as it raises them itself, unless the
+    user set them."""
+    tunables = os.environ.get("GLIBC_TUNABLES", "")
+    if not sys.platform.startswith("linux") or any(map(os.environ.get, OWN_SETTINGS)):
+        return
+    if "glibc.malloc.mmap_threshold" in tunables or "glibc.malloc.trim_threshold" in tunables:
         return
     try:
         mallopt = ctypes.CDLL(None).mallopt
