@@ -305,7 +305,7 @@ def open_news(
     _unwatched(around.depths, around.reach, view.taken, view.reach, offsets, free, wanted)
     distance = np.abs(offsets).sum(axis=1)
     nearest = np.argmin(np.where(wanted, distance[None], np.iinfo(np.int64).max), axis=1)
-    found = frame + offsets[nearest]
+    found = frame + np.take(offsets, nearest, axis=0)
     localised = memory.localised
     source = localised & sense.blueprint.contains(sense.group, frame) & wanted.any(axis=1)
     speaks = sense.heard & sense.kin & ~sense.seed & (said.localised == 1)
@@ -317,7 +317,7 @@ def open_news(
         memory.gone, own_word, cap,
     )  # fmt: skip
     heard = relay.heard(said.news_hops)
-    stale = view.at(sense.owner, said.news - frame[sense.owner])[0]
+    stale = view.at(sense.owner, said.news - np.take(frame, sense.owner, axis=0))[0]
     stale |= word(sense.owner, said.news) <= np.minimum(heard, cap) + 1
     hops, news = relay.relay(sense, speaks & ~stale, heard, said.news, source, found, cap)
     held = localised & (memory.news_hops < cap)
