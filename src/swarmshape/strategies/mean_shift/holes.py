@@ -128,10 +128,12 @@ def unwalled(
     (`fuzz_programs.py mean-shift`, case 5). The hole it fills stays walled, so no robot
     carries it back. A rim hole whose neighbours on the rim are walled too stays open, and
     so does one deeper in whose shallower neighbours stalled robots hold."""
-    ways = base[:, None, :] + STEPS[1:][None]
-    walled = holes & (around.depth(ways) == 1) & sense.ready[:, None]
-    robots = np.flatnonzero(walled.any(axis=1))  # the few at rest beside a hole on the rim
-    walled, ways = walled[robots], ways[robots]
+    # the few at rest beside a hole, then those of them beside one on the rim
+    robots = np.flatnonzero((holes & sense.ready[:, None]).any(axis=1))
+    ways = np.take(base, robots, axis=0)[:, None, :] + STEPS[1:][None]
+    walled = np.take(holes, robots, axis=0) & (around.depth(ways, robots) == 1)
+    on_rim = walled.any(axis=1)
+    robots, walled, ways = robots[on_rim], walled[on_rim], ways[on_rim]
     rows = np.repeat(robots, len(STEPS) - 1)
     silent = np.append(~sense.heard & ~sense.seed, False)  # per entry; False for none
     for step in STEPS[1:]:
