@@ -73,6 +73,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from swarmshape.core.compiled import njit
 from swarmshape.core.local import Memory, Program, Schema, Slot
 from swarmshape.core.motion import SLOWEST, STEPS
 from swarmshape.core.options import option
@@ -335,14 +336,13 @@ class MeanShift(Program):
         n = len(sense)
         ways = STEPS[1:]
         into = offset[:, None, :] + ways[None]
-        taken = view.at(np.repeat(np.arange(n), len(ways)), into.reshape(-1, 2))[0]
-        in_shape = around.contains(into)
-        open_ = ~taken.reshape(n, -1)
+        open_, in_shape, deeper = (np.empty((n, len(ways)), dtype=bool) for _ in range(3))
+        _entered(view.bordered_taken, view.reach, around.inside, around.depths, around.reach,
+                 offset, open_, in_shape, deeper)  # fmt: skip
         score = command @ ways.T
         toward = np.where((~inside & across.any(axis=1))[:, None], across, toward)
         wanted = np.where(toward.any(axis=1)[:, None], toward, score > 0)
         outward = open_ & wanted
-        deeper = open_ & in_shape & (around.depth(into) > around.depth(offset)[:, None])
         # a hole robots coming in can reach is theirs; a robot on its way in takes one too
         # when the mean shift draws it there
         met, empty = holes.open_holes(sense, around, said, view, into)
@@ -376,3 +376,33 @@ class MeanShift(Program):
     def finished(self, memory: Memory) -> np.ndarray:
         """Robots at rest on a cell of their shape (one may move again to fill a hole)."""
         return memory.in_place.copy()
+
+
+@njit
+def _entered(
+    taken: np.ndarray,
+    sight: int,
+    inside: np.ndarray,
+    depth: np.ndarray,
+    reach: int,
+    base: np.ndarray,
+    open_: np.ndarray,
+    in_shape: np.ndarray,
+    deeper: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
+    """Per robot and move from its `base`, the cell it enters: whether it senses it free
+    (`View`'s bordered squares, `sight` cells either way, beyond them free), whether it lies
+    in its shape, and whether it is free and deeper in it than the base (`Around`'s squares,
+    `reach` cells either way). As numpy lookups over every robot, 1.8 ms of a 10,000-robot
+    step."""
+    last = 2 * sight + 2
+    for robot in range(len(base)):
+        bx, by = base[robot, 0], base[robot, 1]
+        here = depth[robot, bx + reach, by + reach]
+        for j in range(len(STEPS) - 1):
+            x, y = bx + STEPS[j + 1, 0], by + STEPS[j + 1, 1]
+            vx, vy = min(max(x + sight + 1, 0), last), min(max(y + sight + 1, 0), last)
+            open_[robot, j] = not taken[robot, vx, vy]
+            in_shape[robot, j] = inside[robot, x + reach, y + reach]
+            there = depth[robot, x + reach, y + reach]
+            deeper[robot, j] = open_[robot, j] and in_shape[robot, j] and there > here
