@@ -303,13 +303,10 @@ def open_news(
     n = len(free)
     if np.abs(offsets).max(initial=0) + 1 > around.reach:
         raise ValueError(f"a cell beside one looked at lies beyond {around.reach} cells")
-    wanted = np.empty_like(free)
-    _unwatched(around.depths, around.reach, view.taken, view.reach, offsets, free, wanted)
-    distance = np.abs(offsets).sum(axis=1)
-    nearest = np.argmin(np.where(wanted, distance[None], np.iinfo(np.int64).max), axis=1)
-    found = frame + np.take(offsets, nearest, axis=0)
+    nearest = _unwatched(around.depths, around.reach, view.taken, view.reach, offsets, free)
+    found = frame + np.take(offsets, np.maximum(nearest, 0), axis=0)
     localised = memory.localised
-    source = localised & sense.blueprint.contains(sense.group, frame) & wanted.any(axis=1)
+    source = localised & sense.blueprint.contains(sense.group, frame) & (nearest >= 0)
     speaks = sense.heard & sense.kin & ~sense.seed & (said.localised == 1)
     robots = np.arange(n)
     heard_word = np.minimum(relay.heard(said.gone_age), cap) + 1
@@ -343,26 +340,30 @@ def _unwatched(
     sight: int,
     offsets: np.ndarray,
     free: np.ndarray,
-    wanted: np.ndarray,
-) -> None:  # pragma: no cover (compiled)
-    """`open_news`'s cells to tell of: per robot and window offset, a `free` cell on the rim
-    (`depth` 1, in `Around`'s squares of `reach` cells either way) with no robot it senses
-    (`taken`, `View`'s squares of `sight`) outside beside it. As numpy passes, a gather per
-    way, `open_news` took 22 to 24 ms a call on a 10,000-robot `mean-shift` step (18 ms
-    now)."""
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`open_news`'s cell to tell of, per robot: of the `free` cells at window `offsets` on
+    the rim (`depth` 1, in `Around`'s squares of `reach` cells either way) with no robot it
+    senses (`taken`, `View`'s squares of `sight`) outside beside them, the index of the
+    nearest (fewest moves; the first of equals), -1 for none. As numpy passes, a gather per
+    way, `open_news` took 22 to 24 ms a call on a 10,000-robot `mean-shift` step; the nearest
+    picked by numpy from a mask of those cells, 0.7 ms of its 4.4 ms."""
+    nearest = np.full(free.shape[0], -1, dtype=np.int64)
     for robot in range(free.shape[0]):
+        least = np.iinfo(np.int64).max
         for j in range(free.shape[1]):
             x, y = offsets[j, 0], offsets[j, 1]
-            wanted[robot, j] = free[robot, j] and depth[robot, x + reach, y + reach] == 1
+            if abs(x) + abs(y) >= least or not free[robot, j]:
+                continue
+            wanted = depth[robot, x + reach, y + reach] == 1
             for direction in range(1, 5):
-                if not wanted[robot, j]:
-                    break
                 bx, by = x + STEPS[direction, 0], y + STEPS[direction, 1]
                 if abs(bx) > sight or abs(by) > sight:
                     continue  # beyond its senses: nobody it knows of
                 outside = depth[robot, bx + reach, by + reach] == 0
-                if outside and taken[robot, bx + sight, by + sight]:
-                    wanted[robot, j] = False
+                wanted &= not (outside and taken[robot, bx + sight, by + sight])
+            if wanted:
+                nearest[robot], least = j, abs(x) + abs(y)
+    return nearest
 
 
 @njit
