@@ -81,9 +81,8 @@ def mean_shift(
     axes copies row by row, 7 to 14 times slower."""
     n, offsets = len(sense), window.offsets
     r = view.reach
-    taken = view.taken[:, offsets[:, 0] + r, offsets[:, 1] + r]
-    away = (offsets[None, :, 0] != base[:, None, 0]) | (offsets[None, :, 1] != base[:, None, 1])
-    free = around.contains(offsets[None]) & ~taken & away
+    free = np.empty((n, len(offsets)), dtype=bool)
+    _unoccupied(view.bordered_taken, r, around.inside, around.reach, offsets, base, free)
     rows = np.flatnonzero(outside & free.any(axis=1))  # the others have no cell to reach
     walls, side = np.take(view.taken, rows, axis=0), 2 * r + 1
     reach = walkable(walls, np.take(base, rows, axis=0), offsets).reshape(len(rows), side * side)
@@ -95,6 +94,30 @@ def mean_shift(
     relative = offsets[None] - base[sees][:, None, :]
     shift[sees] = np.einsum("nk,nkd->nd", weight[sees], relative) / total[sees, None]
     return shift, free
+
+
+@njit
+def _unoccupied(
+    taken: np.ndarray,
+    sight: int,
+    inside: np.ndarray,
+    reach: int,
+    offsets: np.ndarray,
+    base: np.ndarray,
+    free: np.ndarray,
+) -> None:  # pragma: no cover (compiled)
+    """`mean_shift`'s unoccupied shape cells, per robot and window offset: in its shape
+    (`Around`'s squares, `reach` cells either way), nothing it senses on it (`View`'s bordered
+    squares, `sight` cells either way) and not its `base`. Three numpy passes over every
+    robot's window cost 0.85 ms a step at 10,000 robots."""
+    for robot in range(len(base)):
+        for j in range(len(offsets)):
+            x, y = offsets[j, 0], offsets[j, 1]
+            free[robot, j] = (
+                inside[robot, x + reach, y + reach]
+                and not taken[robot, x + sight + 1, y + sight + 1]
+                and (x != base[robot, 0] or y != base[robot, 1])
+            )
 
 
 def walkable(walls: np.ndarray, base: np.ndarray, offsets: np.ndarray) -> np.ndarray:
