@@ -99,15 +99,11 @@ class Blueprint:
         """Whether each frame cell ``(k, 2)`` is in the shape of the matching group."""
         return self.number(groups, frame) >= 0
 
-    def number_around(self, groups: np.ndarray, frame: np.ndarray, reach: int) -> np.ndarray:
-        """`number` over the square of half-width `reach` round each frame cell ``(k, 2)``:
-        ``(k, side, side)``, the frame cell at ``[reach, reach]`` (see `Boxes.around`)."""
-        return self._numbers.around(groups, frame, reach)
-
     def contains_around(self, groups: np.ndarray, frame: np.ndarray, reach: int) -> np.ndarray:
-        """`contains` over the square of half-width `reach` round each frame cell ``(k, 2)``,
-        as `number_around` lays it out: a byte a cell, not the eight of a number, which made
-        `mean-shift`'s squares at 10,000 robots cost it 3 ms a step, not 0.5."""
+        """`contains` over the square of half-width `reach` round each frame cell ``(k, 2)``:
+        ``(k, side, side)``, the frame cell at ``[reach, reach]`` (see `Boxes.around`). A byte
+        a cell: squares of cell numbers, eight bytes a cell compared with 0, cost `mean-shift`
+        3 ms a step at 10,000 robots, not 0.5."""
         return self._inside.around(groups, frame, reach)
 
     def cell(self, groups: np.ndarray, numbers: np.ndarray) -> np.ndarray:

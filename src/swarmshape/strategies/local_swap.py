@@ -576,8 +576,8 @@ def _open_in_sight(
     round the shape to the open cells (a star, seed 3)."""
     recent = memory.gave & (memory.since_trade < TABU)
     disc, reach = _disc(radius), int(radius)
-    numbers = sense.blueprint.number_around(sense.group, memory.frame, reach)
-    inside = numbers[:, disc[:, 0] + reach, disc[:, 1] + reach] >= 0
+    squares = sense.blueprint.contains_around(sense.group, memory.frame, reach)
+    inside = squares[:, disc[:, 0] + reach, disc[:, 1] + reach]
     holds = sense.heard & sense.kin & ~sense.seed & (sense.message[:, HAS] == 1)
     taken = _taken(
         sense.owner, _cells(sense), holds, sense.message, memory.frame, memory.has_goal,
