@@ -344,13 +344,14 @@ class MeanShift(Program):
         wanted = np.where(toward.any(axis=1)[:, None], toward, score > 0)
         outward = open_ & wanted
         # a hole robots coming in can reach is theirs; a robot on its way in takes one too
-        # when the mean shift draws it there
-        met, empty = holes.open_holes(sense, around, said, view, into)
+        # when the mean shift draws it there; a robot coming in beside a hole keeps it, and
+        # one waiting in a pocket pulls the others
+        pulling = inside & (pull < cap)
+        asked = deeper | (open_ & in_shape & pulling[:, None])
+        met, empty = holes.open_holes(sense, around, said, view, into, asked)
         drawn = ~memory.in_place[:, None] & (score >= self.options.tau * self.options.exploring)
         inward = deeper & (~(met | empty) | drawn)
         inward |= holes.unwalled(sense, memory, around, said, view, offset, open_ & in_shape)
-        # a robot coming in beside a hole keeps it; one waiting in a pocket pulls the others
-        pulling = inside & (pull < cap)
         to_pocket = open_ & in_shape & ~met
         to_pocket &= holes.pulled(sense, said, view, into, pull, cap)
         inward[pulling] = to_pocket[pulling]

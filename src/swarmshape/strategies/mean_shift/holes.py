@@ -54,21 +54,28 @@ from swarmshape.strategies.skills.view import SILENCE, View
 
 
 def open_holes(
-    sense: Perception, around: shape.Around, said: SimpleNamespace, view: View, cells: np.ndarray
+    sense: Perception,
+    around: shape.Around,
+    said: SimpleNamespace,
+    view: View,
+    cells: np.ndarray,
+    asked: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(n, k)`` twice: for cells ``(n, k, 2)`` relative to each robot's own, whether a robot
     of the group on its way in (one that speaks, outside the shape or not staying where it is;
     stalled robots are silent) is beside the cell, and whether robots coming in can reach it
     through an empty cell beside it (not in a pocket the shape encloses, which no robot comes
     in from); either lies beside it (not the robot's own cell), shallower in the shape
-    (outside it is shallowest)."""
+    (outside it is shallowest). Only cells `asked` ``(n, k)`` are looked at (neither
+    elsewhere): a look reads four robots' squares back into the cache, and most robots of a
+    step ask of none."""
     if np.abs(cells).max(initial=0) + 1 > around.reach:
         raise ValueError(f"a cell beside one looked at lies beyond {around.reach} cells")
     met = np.empty(cells.shape[:2], dtype=bool)
     empty = np.empty(cells.shape[:2], dtype=bool)
     speaks, moving = sense.heard & sense.kin & ~sense.seed, said.stays == 0
     squares = (around.depths, around.inside, around.reach, view.bordered_taken, view.bordered_who)
-    _open_holes(*squares, view.reach, speaks, moving, cells, met, empty)
+    _open_holes(*squares, view.reach, speaks, moving, cells, asked, met, empty)
     return met, empty
 
 
@@ -83,6 +90,7 @@ def _open_holes(
     speaks: np.ndarray,
     moving: np.ndarray,
     cells: np.ndarray,
+    asked: np.ndarray,
     met: np.ndarray,
     empty: np.ndarray,
 ) -> None:  # pragma: no cover (compiled)
@@ -92,9 +100,11 @@ def _open_holes(
     last = 2 * sight + 2
     for robot in range(cells.shape[0]):
         for j in range(cells.shape[1]):
+            met[robot, j] = empty[robot, j] = False
+            if not asked[robot, j]:
+                continue
             x, y = cells[robot, j, 0], cells[robot, j, 1]
             here = depth[robot, x + reach, y + reach]
-            met[robot, j] = empty[robot, j] = False
             for direction in range(1, 5):
                 bx, by = x + STEPS[direction, 0], y + STEPS[direction, 1]
                 there = depth[robot, bx + reach, by + reach]
@@ -147,7 +157,7 @@ def unwalled(
     due = memory.walled >= SILENCE
     if not due.any():
         return due
-    met, empty = open_holes(sense, around, said, view, base[:, None, :])
+    met, empty = open_holes(sense, around, said, view, base[:, None, :], due.any(axis=1)[:, None])
     mine = (around.depth(base) == 1) & (met | empty)[:, 0]
     return due & mine[:, None]
 
