@@ -1108,8 +1108,9 @@ def _plan(
     disc = _disc(radius)
     blocked[:, disc[:, 0] + reach, disc[:, 1] + reach] = False
     sat = _cells(sense)
-    near = _within(sat, reach)
-    blocked[sense.owner[near], sat[near, 0] + reach, sat[near, 1] + reach] = True
+    near = np.flatnonzero(_within(sat, reach))
+    at = np.take(sat, near, axis=0) + reach  # numpy 2.4 copies sat[near] row by row
+    blocked[np.take(sense.owner, near), at[:, 0], at[:, 1]] = True
     for direction in range(1, len(STEPS)):
         (dx, dy) = STEPS[direction] + reach
         blocked[occupied[:, direction], dx, dy] = True
