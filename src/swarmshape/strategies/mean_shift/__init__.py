@@ -223,7 +223,7 @@ class MeanShift(Program):
                 sense, memory, view, around, window, rows, way, goal, rng
             )
         rows = np.flatnonzero(outside & sees)
-        walls = explore.seeded(view.taken[rows], frame[rows])
+        walls = explore.seeded(view.taken_of(rows), frame[rows])
         toward[rows] = explore.nearer(walls, offset[rows], free[rows], window.offsets)
         pull = self._hops(sense, speaks, said.pull, waiting, on_shape | waiting, cap)
         across = np.zeros_like(toward)

@@ -84,7 +84,7 @@ def mean_shift(
     free = np.empty((n, len(offsets)), dtype=bool)
     _unoccupied(view.bordered_taken, r, around.inside, around.reach, offsets, base, free)
     rows = np.flatnonzero(outside & free.any(axis=1))  # the others have no cell to reach
-    walls, side = np.take(view.taken, rows, axis=0), 2 * r + 1
+    walls, side = view.taken_of(rows), 2 * r + 1
     reach = walkable(walls, np.take(base, rows, axis=0), offsets).reshape(len(rows), side * side)
     free[rows] &= np.take(reach, (offsets[:, 0] + r) * side + offsets[:, 1] + r, axis=1)
     weight = np.where(free, window.weights(base), 0.0)
@@ -216,10 +216,11 @@ def round_the_silent(
     frame = memory.frame[robots]
     # per entry, and not silent for none (a `who` of -1 picks the last): with no entry at
     # all (faults left a robot alone) there is nothing else to pick
-    silent = np.append(~sense.heard & ~sense.seed, False)[view.who[robots]]
+    silent = np.append(~sense.heard & ~sense.seed, False)[view.who_of(robots)]
     walls = seeded(silent, frame)
     start, r, offsets = base(sense)[robots], view.reach, window.offsets
-    goal = (offsets[None] == (way - frame)[:, None]).all(axis=2)
+    aim = way - frame
+    goal = (offsets[None, :, 0] == aim[:, None, 0]) & (offsets[None, :, 1] == aim[:, None, 1])
     moves = nearer(walls, start, goal, offsets)
     # only silent robots in sight, or a wall being gone round, can call for more
     rows = np.flatnonzero(silent.any(axis=(1, 2)) | (memory.rounding[robots] != 0))
@@ -227,7 +228,7 @@ def round_the_silent(
         return moves
     side = 2 * r + 1
     on_shape = around.contains(square(r))[robots[rows]].reshape(-1, side, side)
-    held = seeded(view.taken[robots[rows]] & on_shape, frame[rows])
+    held = seeded(view.taken_of(robots[rows]) & on_shape, frame[rows])
     firm = held | silent[rows]
     reached = walkable(firm, start[rows], offsets)[:, offsets[:, 0] + r, offsets[:, 1] + r]
     open_way = (goal[rows] & reached).any(axis=1)

@@ -193,7 +193,7 @@ def across_pockets(
     inside = around.contains(square)[robots].reshape(-1, 2 * reach + 1, 2 * reach + 1)
     pockets = around.enclosed(square)[robots].reshape(inside.shape)
     depth = np.where(inside, around.depth(square)[robots].reshape(inside.shape), 0)
-    walls = explore.seeded(view.taken[robots], frame[robots]) | ~pockets[:, 1:-1, 1:-1]
+    walls = explore.seeded(view.taken_of(robots), frame[robots]) | ~pockets[:, 1:-1, 1:-1]
     rows = np.arange(len(robots))
     at = base[robots] + reach
     on_shape, own = inside[rows, at[:, 0], at[:, 1]], depth[rows, at[:, 0], at[:, 1]]

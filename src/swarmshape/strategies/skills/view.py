@@ -43,6 +43,14 @@ class View:
         _mark(sense.offset, sense.progress, sense.heading, sense.owner, coming, r,
               self.cells, self.bordered_taken, self.bordered_who)  # fmt: skip
 
+    def taken_of(self, robots: np.ndarray) -> np.ndarray:
+        """`taken`'s squares of `robots` only ``(k, side, side)``."""
+        return _inner(self.bordered_taken, robots)
+
+    def who_of(self, robots: np.ndarray) -> np.ndarray:
+        """`who`'s squares of `robots` only ``(k, side, side)``."""
+        return _inner(self.bordered_who, robots)
+
     def at(self, robots: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each robot senses something on a cell relative to its own, and the entry of
         the neighbour there (-1: none). Cells beyond its window are free as far as it knows."""
@@ -50,6 +58,13 @@ class View:
         who = np.empty(len(robots), dtype=np.int64)
         _look(self.bordered_taken, self.bordered_who, robots, cells, self.reach, taken, who)
         return taken, who
+
+
+def _inner(bordered: np.ndarray, robots: np.ndarray) -> np.ndarray:
+    """The squares of `robots` without their border, gathered by np.take from the contiguous
+    bordered ones: numpy 2.4's ``taken[robots]`` copies row by row, and np.take of `taken`, a
+    view, copies all of it first (0.3 ms a call at 10,000 robots)."""
+    return np.take(bordered, robots, axis=0)[:, 1:-1, 1:-1]
 
 
 @njit
