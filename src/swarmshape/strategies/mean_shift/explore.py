@@ -337,11 +337,25 @@ def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:
     direction number, or it stood there for good (a 12-cell shape, the robot right above the
     seeds, 92 % for 20,000 steps: ``swarmshape check mean-shift --seed 100``)."""
     xi = grey(sense.blueprint, sense.group, cells[:, None] + STEPS)  # its cell, each move's
-    lower = xi[:, 1:] < xi[:, :1]
-    down = (lower @ STEPS[1:]).astype(np.float64)
-    first = np.take(STEPS, np.where(lower.any(axis=1), 1 + np.argmax(lower, axis=1), 0), axis=0)
-    down = np.where((down == 0).all(axis=1)[:, None], first, down)
+    down = np.empty((len(xi), 2))
+    _downhill(xi, down)
     return unit(down) * np.minimum(xi[:, 0] / band, 1.0)[:, None]
+
+
+@njit
+def _downhill(xi: np.ndarray, down: np.ndarray) -> None:  # pragma: no cover (compiled)
+    """`entering`'s way per robot, from the levels `xi` of its cell and each move's cell:
+    the sum of the moves that lower its level, or the first of them where that sum is zero.
+    Five numpy passes over every robot cost a 10,000-robot step 0.6 ms."""
+    for robot in range(len(xi)):
+        dx = dy = first = 0
+        for direction in range(1, len(STEPS)):
+            if xi[robot, direction] < xi[robot, 0]:
+                dx, dy = dx + STEPS[direction, 0], dy + STEPS[direction, 1]
+                first = direction if first == 0 else first
+        if dx == 0 and dy == 0:
+            dx, dy = STEPS[first, 0], STEPS[first, 1]
+        down[robot, 0], down[robot, 1] = dx, dy
 
 
 def grey(blueprint: Blueprint, groups: np.ndarray, cells: np.ndarray) -> np.ndarray:
