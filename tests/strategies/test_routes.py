@@ -6,6 +6,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 import scipy
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -97,6 +98,32 @@ def test_route_fields_given_up_for_room_are_worked_out_again(monkeypatch):
         for target, row in zip(targets, rows.tolist(), strict=True):
             assert np.array_equal(pool.fields[row], routes._field(blueprint, 0, *target).ravel())
         assert len(pool.slot) == max(2, len(targets))
+
+
+def test_where_the_system_maps_less_the_fields_keep_less_and_still_route(monkeypatch):
+    """Under a limit on address space the whole room (512 MB a group) could not be mapped,
+    and a two-group run that needs a few MB stopped with a MemoryError (a review at stop
+    64): the room halves until the system maps it. A step that needs more fields than that
+    still gets them, copying only the rows written."""
+    blueprint = blueprint_of(U)
+    cells = int(routes._box(blueprint, 0)[1].prod())
+    real = routes.mmap.mmap
+
+    def limited(fileno: int, length: int):
+        if length > 8 * cells * 2:
+            raise OSError(12, "Cannot allocate memory")
+        return real(fileno, length)
+
+    monkeypatch.setattr(routes.mmap, "mmap", limited)
+    pool = routes._Fields(blueprint, 0)
+    assert pool.room == 2
+    targets = [(0, 0), (6, 3), (3, 3)]
+    with pytest.raises(OSError):  # three at once need more than the system maps
+        pool.slots(np.array(targets))
+    monkeypatch.setattr(routes.mmap, "mmap", real)
+    rows = pool.slots(np.array(targets))
+    for target, row in zip(targets, rows.tolist(), strict=True):
+        assert np.array_equal(pool.fields[row], routes._field(blueprint, 0, *target).ravel())
 
 
 def test_a_new_shape_lets_the_old_shapes_fields_go():

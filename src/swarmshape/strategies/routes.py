@@ -183,8 +183,8 @@ class _Fields:
     def __init__(self, blueprint: Blueprint, group: int) -> None:
         self.blueprint, self.group = blueprint, group
         self.cells = int(_box(blueprint, group)[1].prod())
-        self.room = max(1, FIELD_BYTES // (8 * self.cells))
-        self.fields = _unwritten(self.room, self.cells)
+        self.fields = _unwritten(max(1, FIELD_BYTES // (8 * self.cells)), self.cells)
+        self.room = len(self.fields)
         self.slot: dict[tuple[int, int], int] = {}  # in order of last use
         self.used = 0  # rows that have held a field: `fields[used:]` was never written
         self.free: list[int] = []  # rows below `used` that hold no kept field
@@ -204,7 +204,9 @@ class _Fields:
                 self.free.append(self.slot.pop(key))
         lacking = len(missing) - len(self.free) - (len(self.fields) - self.used)
         if lacking > 0:  # this step alone needs more fields than the room holds
-            self.fields = np.concatenate([self.fields, np.empty((lacking, self.cells))])
+            grown = _unwritten(len(self.fields) + lacking, self.cells, at_least=True)
+            grown[: self.used] = self.fields[: self.used]  # the rows never written stay so
+            self.fields = grown
         for key in missing:
             if self.free:
                 row = self.free.pop()
@@ -215,12 +217,22 @@ class _Fields:
         return np.array([self.slot[key] for key in keys], dtype=np.int64)[which.reshape(-1)]
 
 
-def _unwritten(rows: int, columns: int) -> np.ndarray:
+def _unwritten(rows: int, columns: int, at_least: bool = False) -> np.ndarray:
     """A float array (of zeros) that the system backs a small page at a time as it is
     first written. numpy asks for huge pages for an array over 4 MB, and on a virtual machine
     a row's first write into a fresh 2 MB page cost up to 0.5 ms, against 0.1 ms in small
-    pages: `local-swap` at 10,000 robots works out some 25 new fields a step."""
-    return np.frombuffer(mmap.mmap(-1, rows * columns * 8), dtype=np.float64).reshape(rows, columns)
+    pages: `local-swap` at 10,000 robots works out some 25 new fields a step. Where the
+    system will not map `rows` rows (a limit on address space, strict overcommit), as many as
+    it will, halving, unless `at_least`: 512 MB a group refused a run that needs far less."""
+    while True:
+        try:
+            room = mmap.mmap(-1, rows * columns * 8)
+        except (OSError, MemoryError):
+            if at_least or rows == 1:
+                raise
+            rows //= 2
+        else:
+            return np.frombuffer(room, dtype=np.float64).reshape(rows, columns)
 
 
 def _unique_cells(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
