@@ -14,8 +14,10 @@ from scipy import ndimage
 
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint
+from swarmshape.strategies.mean_shift.explore import grey
 from swarmshape.strategies.skills import shape
 from swarmshape.strategies.skills.localise import roam
+from swarmshape.strategies.skills.relay import best_per_robot
 from swarmshape.strategies.skills.view import paths
 from tests.conftest import grid_from
 
@@ -91,6 +93,21 @@ def test_a_cell_beyond_the_square_worked_out_is_refused_not_wrapped_round():
     around = shape.Around(blueprint, np.zeros(2, dtype=np.int64), np.zeros((2, 2), int), 2)
     with pytest.raises(ValueError, match="beyond"):
         around.depth(np.array([[[-3, 0]]]))
+
+
+def test_lookups_over_no_robot_give_nothing_and_a_bad_entry_owner_is_refused():
+    """Faults can leave a group no robot to look up for; the compiled passes check no index,
+    so an entry said to belong to a robot there is not is refused before them (found by a
+    review at stop 64: numpy's reshape raised on no robot, and the compiled pass crashed the
+    process on an owner out of range)."""
+    blueprint = Blueprint.of([np.argwhere(grid_from("## ##"))])
+    none = np.zeros(0, dtype=np.int64)
+    assert grey(blueprint, none, np.zeros((0, 5, 2), dtype=np.int64)).shape == (0, 5)
+    assert grey(blueprint, none, np.zeros((0, 2), dtype=np.int64)).shape == (0,)
+    keys, mask = np.array([3, 1, 2]), np.ones(3, dtype=bool)
+    assert best_per_robot(2, np.array([0, 0, 1]), keys, mask).tolist() == [1, 2]
+    with pytest.raises(IndexError, match="robots 0 to 2"):
+        best_per_robot(2, np.array([0, 1, 2]), keys, mask)
 
 
 class AtRest(SimpleNamespace):

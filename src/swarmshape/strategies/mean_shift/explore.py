@@ -363,9 +363,11 @@ def grey(blueprint: Blueprint, groups: np.ndarray, cells: np.ndarray) -> np.ndar
     shape, round the seeds (0 on the shape; the paper's grey image, one level a cell). Per
     robot, one cell ``(n, 2)`` or several ``(n, k, 2)``."""
     xi = np.zeros(cells.shape[:-1], dtype=np.int64)
+    per_robot = int(np.prod(cells.shape[1:-1]))  # not -1: numpy cannot tell it for no robot
+    flat = cells.reshape(len(cells), per_robot, 2)
     for group, (low, field) in enumerate(_grey_fields(blueprint)):
         mine = np.flatnonzero(groups == group)
-        _levels(field, low, cells.reshape(len(cells), -1, 2), mine, xi.reshape(len(cells), -1))
+        _levels(field, low, flat, mine, xi.reshape(len(cells), per_robot))
     return xi
 
 

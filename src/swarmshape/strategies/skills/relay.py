@@ -58,7 +58,10 @@ def relay(
 
 def best_per_robot(n: int, owner: np.ndarray, key: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Per robot (of `n`), the index of its entry in `mask` with the least `key` (of equals,
-    the first, in reach order: the nearest), or -1."""
+    the first, in reach order: the nearest), or -1. Entries come by robot (`owner` never
+    falls), so its ends bound it: the compiled pass checks no index."""
+    if len(owner) and (owner[0] < 0 or owner[-1] >= n):
+        raise IndexError(f"entries belong to robots {owner[0]} to {owner[-1]}, not 0 to {n - 1}")
     return _best_per_robot(n, owner, key, mask)
 
 
