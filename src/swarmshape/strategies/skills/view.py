@@ -91,15 +91,18 @@ def _mark(
         for axis in range(2):
             own = progress[robot] * STEPS[heading[robot], axis]
             cells[entry, axis] = np.int64(np.rint(offset[entry, axis] + own))
-    for k in range(2 * m):  # every entry's cell, then the cell ahead of each one coming
-        entry = k % m
-        way = coming[entry] if k >= m else 0
-        if k >= m and way <= 0:
-            continue
+
+    def mark(entry: int, way: int) -> None:
         x, y = cells[entry, 0] + STEPS[way, 0], cells[entry, 1] + STEPS[way, 1]
         if abs(x) <= reach and abs(y) <= reach:
             taken[owner[entry], x + reach + 1, y + reach + 1] = True
             who[owner[entry], x + reach + 1, y + reach + 1] = entry
+
+    for entry in range(m):
+        mark(entry, 0)
+    for entry in range(m):  # then the cell ahead of each one coming
+        if coming[entry] > 0:
+            mark(entry, coming[entry])
 
 
 @njit
