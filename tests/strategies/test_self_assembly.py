@@ -20,7 +20,15 @@ from swarmshape.errors import InputError
 from swarmshape.io.bitmap import ShapeWarning
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import create
-from swarmshape.strategies.self_assembly import JOINED, STOPPED, WAIT, WANDER, SelfAssembly
+from swarmshape.strategies.self_assembly import (
+    INSIDE,
+    JOINED,
+    OUTSIDE,
+    STOPPED,
+    WAIT,
+    WANDER,
+    SelfAssembly,
+)
 from tests.conftest import SHAPES, each_choice, grid_from
 
 
@@ -102,6 +110,34 @@ def test_the_packed_start_is_a_block_against_the_seeds():
     assert touching.any()
     low, high = swarm.cell.min(axis=0), swarm.cell.max(axis=0)
     assert (high - low + 1).prod() == len(swarm.cell)  # 64 robots: an 8x8 block
+
+
+def test_an_edge_follower_goes_straight_on_past_a_cell_without_stopping_on_it():
+    """Every cell a start and a stop cost about five steps a cell at the default limits,
+    against two at top speed: a follower under way now works out what it would do on the cell
+    it is coming to, and goes on without braking when that is straight on. Before, it stopped
+    on every cell it went straight past."""
+    config = configure(
+        SHAPES / "letter-k.png", strategy="self-assembly", cells=12, start="packed", seed=1
+    )
+    swarm = build(config)
+    memory = swarm.driver.memory
+    last, rested = np.zeros_like(swarm.cell), np.zeros(len(swarm.cell), dtype=bool)
+    straight = stopped = 0
+    for _ in range(600):
+        before = swarm.cell.copy()
+        swarm.step()
+        way = swarm.cell - before
+        following = (memory.state == OUTSIDE) | (memory.state == INSIDE)
+        moved = np.flatnonzero(way.any(axis=1) & following)
+        on = moved[(way[moved] == last[moved]).all(axis=1)]  # straight past its last cell
+        straight += len(on)
+        stopped += int(rested[on].sum())
+        last[moved], rested[moved] = way[moved], False
+        rested |= swarm.ahead == 0
+    assert straight > 100
+    assert stopped < straight / 2, "it stops only where something stops it"
+    assert swarm.overlap_total == 0
 
 
 def test_robots_that_hear_nothing_of_the_structure_walk_straight_on_to_find_it():
