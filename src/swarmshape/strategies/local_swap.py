@@ -710,15 +710,16 @@ def _news_heard(
             continue
         hops, stamp = msg[e, OPEN_HOPS] + 1, step - 1 - msg[e, OPEN_AGE]
         x, y = msg[e, OX], msg[e, OY]
+        known = x == known_cell[m, 0] and y == known_cell[m, 1]
+        key = hops - LOYALTY * known
+        if best[m] >= 0 and key >= least[m]:  # no better: skip the dearer checks (most do)
+            continue
         away = np.hypot(float(x - frame[m, 0]), float(y - frame[m, 1]))
         if not _current(step - stamp, hops) or away <= radius:
             continue
-        known = x == known_cell[m, 0] and y == known_cell[m, 1]
         if known and stamp <= known_at[m] and hops > known_hops[m]:
             continue
-        key = hops - LOYALTY * known
-        if best[m] < 0 or key < least[m]:
-            best[m], least[m] = e, key
+        best[m], least[m] = e, key
     return best
 
 
@@ -1282,6 +1283,8 @@ def _partners(
             score = 4 * gain
         elif msg[e, STAYS] == 1 and (fair or push or pushed):
             score = 2 if fair and (in_the_way or in_their_way) else 1
+        if score <= 0:  # the checks below cost more than the score, and most score nothing
+            continue
         same = my_has == their_has and (not my_has or (mgx == tgx and mgy == tgy))
         again = msg[e, NUMBER] == partner[m] and since_trade[m] < TABU
         settled = my_has and mx == mgx and my == mgy
@@ -1302,7 +1305,7 @@ def _partners(
         # a robot on a cell a reshape kept trades only with one leaving a pocket, and both ends
         # know it (a one-sided refusal would leave the other waiting for it for good)
         refused = (kept[m] and msg[e, LEAVING] == 0) or (msg[e, KEPT] == 1 and not leaving[m])
-        if score <= 0 or same or again or held or refused:
+        if same or again or held or refused:
             continue
         if wants[m] < 0 or score > best[m] or (score == best[m] and msg[e, NUMBER] < wants[m]):
             wants[m], best[m] = msg[e, NUMBER], score
