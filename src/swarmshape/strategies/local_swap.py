@@ -1103,19 +1103,20 @@ def _plan(
     y = np.where(delta[:, 1] > 0, 3, np.where(delta[:, 1] < 0, 4, 0))
     first = np.where(np.abs(delta[:, 0]) >= np.abs(delta[:, 1]), x, y)
     rows = np.flatnonzero(going)
+    row = np.zeros(len(sense), dtype=np.int64)
+    row[rows] = np.arange(len(rows))  # each going robot's square in `blocked`
     reach = int(radius)
     side = 2 * reach + 1
-    blocked = np.ones((len(sense), side, side), dtype=bool)
+    blocked = np.ones((len(rows), side, side), dtype=bool)
     disc = _disc(radius)
     blocked[:, disc[:, 0] + reach, disc[:, 1] + reach] = False
     sat = _cells(sense)
-    near = np.flatnonzero(_within(sat, reach))
+    near = np.flatnonzero(going[sense.owner] & _within(sat, reach))
     at = np.take(sat, near, axis=0) + reach  # numpy 2.4 copies sat[near] row by row
-    blocked[np.take(sense.owner, near), at[:, 0], at[:, 1]] = True
+    blocked[row[np.take(sense.owner, near)], at[:, 0], at[:, 1]] = True
     for direction in range(1, len(STEPS)):
         (dx, dy) = STEPS[direction] + reach
-        blocked[occupied[:, direction], dx, dy] = True
-    blocked = blocked[rows]
+        blocked[occupied[rows, direction], dx, dy] = True
     centre = np.zeros(blocked.shape, dtype=bool)
     centre[:, reach, reach] = True
     steps, way = paths(blocked, centre)
@@ -1316,19 +1317,24 @@ def _trade(sense: Perception, memory: Memory) -> None:
     """Robots that wanted each other last step, and hear each other now, swap goals. One
     that gives its goal to a robot leaving a pocket was pushed out, and leaves too (see
     `_leaving`)."""
+    # only the entries of robots that want a partner (few, once most rest), field by field
     me, msg = sense.owner, sense.message
-    mutual = sense.heard & sense.kin & ~sense.seed & (memory.wants[me] >= 0)
-    mutual &= (msg[:, NUMBER] == memory.wants[me]) & (msg[:, WANTS] == sense.number[me])
-    memory.gave[me[mutual]] = memory.has_goal[me[mutual]]
-    memory.given[me[mutual]] = memory.goal[me[mutual]]
-    memory.has_goal[me[mutual]] = msg[mutual, HAS] == 1
-    memory.goal[me[mutual]] = msg[mutual, GX : GY + 1]
-    memory.detour[me[mutual]] = 0  # a detour for the old goal
-    memory.came[me[mutual]] = 0  # the way back may lead to the new one
+    asking = np.flatnonzero((memory.wants >= 0)[me])
+    mutual = sense.heard[asking] & sense.kin[asking] & ~sense.seed[asking]
+    mutual &= msg[asking, NUMBER] == memory.wants[me[asking]]
+    mutual &= msg[asking, WANTS] == sense.number[me[asking]]
+    entries = asking[mutual]
+    me = me[entries]
+    memory.gave[me] = memory.has_goal[me]
+    memory.given[me] = memory.goal[me]
+    memory.has_goal[me] = msg[entries, HAS] == 1
+    memory.goal[me] = msg[entries, GX : GY + 1]
+    memory.detour[me] = 0  # a detour for the old goal
+    memory.came[me] = 0  # the way back may lead to the new one
     memory.since_trade += 1
-    memory.partner[me[mutual]] = msg[mutual, NUMBER]
-    memory.leaving[me[mutual]] = msg[mutual, LEAVING] == 1  # pushed out: it leaves too
-    memory.since_trade[me[mutual]] = 0
+    memory.partner[me] = msg[entries, NUMBER]
+    memory.leaving[me] = msg[entries, LEAVING] == 1  # pushed out: it leaves too
+    memory.since_trade[me] = 0
 
 
 def _silent_cells(sense: Perception, memory: Memory) -> np.ndarray:
