@@ -39,7 +39,6 @@ stepped across them.
 
 from __future__ import annotations
 
-import functools
 from types import SimpleNamespace
 
 import numpy as np
@@ -50,7 +49,7 @@ from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 from swarmshape.strategies.mean_shift import explore
 from swarmshape.strategies.skills import relay, shape
-from swarmshape.strategies.skills.view import SILENCE, View
+from swarmshape.strategies.skills.view import SILENCE, View, bordered
 
 
 def open_holes(
@@ -321,18 +320,15 @@ def open_news(
     robots = np.arange(n)
     heard_word = np.minimum(relay.heard(said.gone_age), cap) + 1
     own_word = np.minimum(memory.gone_age, cap) + 1
-    word = functools.partial(  # the newest word a robot has that a cell is taken (`_newest_word`)
-        _newest_word, sense.start, said.gone_cell, np.where(speaks, heard_word, cap),
-        memory.gone, own_word, cap,
-    )  # fmt: skip
+    # the word robots have that a cell is taken (`_newest_word`)
+    words = (sense.start, said.gone_cell, np.where(speaks, heard_word, cap), memory.gone, own_word)
     heard = relay.heard(said.news_hops)
-    stale = view.at(sense.owner, said.news - np.take(frame, sense.owner, axis=0))[0]
-    stale |= word(sense.owner, said.news) <= np.minimum(heard, cap) + 1
-    hops, news = relay.relay(sense, speaks & ~stale, heard, said.news, source, found, cap)
+    best = _freshest(speaks, heard, said.news, frame, view.bordered_taken, view.reach, *words, cap)
+    hops, news = relay.passed(best, heard, said.news, source, found, cap)
     held = localised & (memory.news_hops < cap)
     older = np.minimum(memory.news_hops, cap - 1) + 1
     seen_taken = view.at(robots, memory.news - frame)[0]
-    told = word(robots, memory.news)
+    told = _newest_word(*words, cap, robots, memory.news)
     dropped = held & (seen_taken | (told <= older))
     kept = (older < cap) & ~source & held & ~dropped
     hops[kept], news[kept] = older[kept], memory.news[kept]
@@ -377,6 +373,55 @@ def _unwatched(
 
 
 @njit
+def _freshest(
+    speaks: np.ndarray,
+    hops: np.ndarray,
+    news: np.ndarray,
+    frame: np.ndarray,
+    taken: np.ndarray,
+    sight: int,
+    start: np.ndarray,
+    cells: np.ndarray,
+    ages: np.ndarray,
+    own_cells: np.ndarray,
+    own_ages: np.ndarray,
+    cap: int,
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`open_news`'s entry per robot whose news it takes (-1: none), as `relay.relay` picks
+    it: of its entries that `speaks` with `hops` below `cap`, the first with the fewest, of
+    those whose `news` cell is not stale. A cell is stale when the robot senses it taken
+    (`View`'s bordered squares `taken`, `sight` cells either way, from its `frame` cell), or
+    has word it is taken (`_word`) as new as the news. Entries are checked fewest hops first,
+    until one is fresh: checking every entry, the word a look through the robot's row each,
+    cost a 10,000-robot step 8 ms."""
+    n = len(start) - 1
+    best = np.full(n, -1, dtype=np.int64)
+    for robot in range(n):
+        level = -1  # the hops of the entries checked so far, all stale
+        while best[robot] < 0:
+            least = cap
+            for e in range(start[robot], start[robot + 1]):
+                if speaks[e] and level < hops[e] < least:
+                    least = hops[e]
+            if least == cap:
+                break
+            for e in range(start[robot], start[robot + 1]):
+                if not speaks[e] or hops[e] != least:
+                    continue
+                x, y = news[e, 0], news[e, 1]
+                vx, vy = bordered(x - frame[robot, 0], y - frame[robot, 1], sight)
+                fresh = not taken[robot, vx, vy]
+                if (
+                    fresh
+                    and _word(start, cells, ages, own_cells, own_ages, cap, robot, x, y) > least + 1
+                ):
+                    best[robot] = e
+                    break
+            level = least
+    return best
+
+
+@njit
 def _newest_word(
     start: np.ndarray,
     cells: np.ndarray,
@@ -387,17 +432,36 @@ def _newest_word(
     robots: np.ndarray,
     asked: np.ndarray,
 ) -> np.ndarray:  # pragma: no cover (compiled)
-    """The newest word each of `robots` has that its `asked` cell ``(m, 2)`` is taken: its age,
-    `cap` for none, from the word its neighbours said (`cells` at `ages` per entry, in the
-    perception's rows `start`) and its own (`own_cells` at `own_ages`). A look through the
-    asking robot's own row: sorting every word heard by robot and cell cost `mean-shift` a
-    twelfth of its step."""
-    out = np.full(len(robots), cap, dtype=np.int64)
+    """The newest word each of `robots` has that its `asked` cell ``(m, 2)`` is taken
+    (`_word`)."""
+    out = np.empty(len(robots), dtype=np.int64)
     for i in range(len(robots)):
-        r, x, y = robots[i], asked[i, 0], asked[i, 1]
-        if own_ages[r] < out[i] and own_cells[r, 0] == x and own_cells[r, 1] == y:
-            out[i] = own_ages[r]
-        for e in range(start[r], start[r + 1]):
-            if ages[e] < out[i] and cells[e, 0] == x and cells[e, 1] == y:
-                out[i] = ages[e]
+        out[i] = _word(
+            start, cells, ages, own_cells, own_ages, cap, robots[i], asked[i, 0], asked[i, 1]
+        )
     return out
+
+
+@njit
+def _word(
+    start: np.ndarray,
+    cells: np.ndarray,
+    ages: np.ndarray,
+    own_cells: np.ndarray,
+    own_ages: np.ndarray,
+    cap: int,
+    robot: int,
+    x: int,
+    y: int,
+) -> int:  # pragma: no cover (compiled)
+    """The newest word `robot` has that cell ``(x, y)`` is taken: its age, `cap` for none,
+    from the word its neighbours said (`cells` at `ages` per entry, in the perception's rows
+    `start`) and its own (`own_cells` at `own_ages`). A look through the robot's own row:
+    sorting every word heard by robot and cell cost `mean-shift` a twelfth of its step."""
+    newest = cap
+    if own_ages[robot] < newest and own_cells[robot, 0] == x and own_cells[robot, 1] == y:
+        newest = own_ages[robot]
+    for e in range(start[robot], start[robot + 1]):
+        if ages[e] < newest and cells[e, 0] == x and cells[e, 1] == y:
+            newest = ages[e]
+    return newest

@@ -46,8 +46,21 @@ def relay(
     and what it `told` ``(m, k)``. Per robot: whether it is a `source` itself and what it
     `found` ``(n, k)``. Counts stop at `cap` (no news)."""
     best = best_per_robot(len(sense), sense.owner, hops, heard & (hops < cap))
+    return passed(best, hops, told, source, found, cap)
+
+
+def passed(
+    best: np.ndarray,
+    hops: np.ndarray,
+    told: np.ndarray,
+    source: np.ndarray,
+    found: np.ndarray,
+    cap: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """`relay`'s counts and news from each robot's `best` entry (-1: none), for a program
+    that picks it its own way."""
     has = best >= 0
-    count = np.full(len(sense), cap, dtype=np.int64)
+    count = np.full(len(best), cap, dtype=np.int64)
     count[has] = np.minimum(hops[best[has]] + 1, cap)
     news = np.zeros_like(found)
     news[has] = told[best[has]]
