@@ -123,6 +123,15 @@ def _localise(
         for e in range(start[r], start[r + 1]):
             if not kin[e]:
                 continue
+            # beside a seed, the seeds alone; else the still robots nearer the seeds; with no
+            # count to the seeds (none at rest within reach of them), every still robot
+            still = not seed[e] and said_localised[e] == 1 and stays[e] == 1
+            if hops[r] == 1:
+                nearer = seed[e]
+            else:
+                nearer = still and (anchor[e] < hops[r] or hops[r] == relay.NONE)
+            if localised[r] and not (at_rest and nearer):
+                continue  # it has its cell and this entry has no vote: nothing to work out
             hx, hy = STEPS[said_heading[e], 0], STEPS[said_heading[e], 1]
             told = said_progress[e] / FIXED
             along = (offset[e, 0] + mx) * hx + (offset[e, 1] + my) * hy
@@ -140,10 +149,6 @@ def _localise(
             robot = not seed[e] and said_localised[e] == 1 and (stays[e] == 1 or moving)
             if not localised[r] and not found[r] and (robot or seed[e]):
                 frame[r, 0], frame[r, 1], found[r] = int(x), int(y), True
-            # beside a seed, the seeds alone; else the still robots nearer the seeds; with no
-            # count to the seeds (none at rest within reach of them), every still robot
-            nearer = seed[e] if hops[r] == 1 else robot and stays[e] == 1 and anchor[e] < hops[r]
-            nearer = nearer or (hops[r] == relay.NONE and robot and stays[e] == 1)
             if at_rest and nearer:
                 dx, dy = int(x) - frame[r, 0], int(y) - frame[r, 1]
                 if abs(dx) <= 2 and abs(dy) <= 2:
