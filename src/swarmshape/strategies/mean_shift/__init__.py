@@ -197,7 +197,9 @@ class MeanShift(Program):
         memory.news_hops, memory.news, memory.gone, memory.gone_age = holes.open_news(
             sense, frame, around, said, free, window.offsets, view, memory, cap
         )
-        pull = explore.entering(sense, base, options.band)
+        rows = np.flatnonzero(~inside)  # the command is for those outside only
+        pull = np.zeros((len(sense), 2))
+        pull[rows] = explore.entering(blueprint, group[rows], base[rows], options.band)
         command = options.exploring * shift + np.where(
             inside[:, None], 0.0, options.entering * pull
         )

@@ -87,12 +87,14 @@ def mean_shift(
     walls, side = view.taken_of(rows), 2 * r + 1
     reach = walkable(walls, np.take(base, rows, axis=0), offsets).reshape(len(rows), side * side)
     free[rows] &= np.take(reach, (offsets[:, 0] + r) * side + offsets[:, 1] + r, axis=1)
-    weight = np.where(free, window.weights(base), 0.0)
+    rows = np.flatnonzero(free.any(axis=1))  # for the others the shift is zero
+    weight = np.where(np.take(free, rows, axis=0), window.weights(np.take(base, rows, axis=0)), 0.0)
     total = weight.sum(axis=1)
     sees = total > 0
+    rows, weight, total = rows[sees], weight[sees], total[sees]
     shift = np.zeros((n, 2))
-    relative = offsets[None] - base[sees][:, None, :]
-    shift[sees] = np.einsum("nk,nkd->nd", weight[sees], relative) / total[sees, None]
+    relative = offsets[None] - np.take(base, rows, axis=0)[:, None, :]
+    shift[rows] = np.einsum("nk,nkd->nd", weight, relative) / total[:, None]
     return shift, free
 
 
@@ -329,14 +331,16 @@ def _look(
     return inside, inside & passable[rows, np.clip(x, 0, 2 * r), np.clip(y, 0, 2 * r)]
 
 
-def entering(sense: Perception, cells: np.ndarray, band: float) -> np.ndarray:
-    """Per robot on frame cell `cells`, its entering command ``(n, 2)``: the unit vector along
-    the moves that lower its grey level (one step nearer the shape), times
+def entering(
+    blueprint: Blueprint, groups: np.ndarray, cells: np.ndarray, band: float
+) -> np.ndarray:
+    """Per robot of `groups` on frame cell `cells`, its entering command ``(n, 2)``: the unit
+    vector along the moves that lower its grey level (one step nearer the shape), times
     ``min(xi / band, 1)`` (zero on the shape). On a ridge, where the way round the seeds is as
     short one way as the opposite way, the two cancel; the robot takes the first of them by
     direction number, or it stood there for good (a 12-cell shape, the robot right above the
     seeds, 92 % for 20,000 steps: ``swarmshape check mean-shift --seed 100``)."""
-    xi = grey(sense.blueprint, sense.group, cells[:, None] + STEPS)  # its cell, each move's
+    xi = grey(blueprint, groups, cells[:, None] + STEPS)  # its cell, each move's
     down = np.empty((len(xi), 2))
     _downhill(xi, down)
     return unit(down) * np.minimum(xi[:, 0] / band, 1.0)[:, None]

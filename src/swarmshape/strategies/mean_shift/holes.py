@@ -259,13 +259,15 @@ def pulled(
     that cell it has the fewest hops to the pocket (the first in `STEPS` order of equals,
     counted from the cell, so that every robot beside it agrees)."""
     n, ways = len(sense), STEPS[1:]
+    chosen = np.zeros((n, len(ways)), dtype=bool)
     rows = np.flatnonzero(pull < cap)  # the few that hear a pull: for the others, no way
+    if not len(rows):
+        return chosen
     pull = pull[rows]
     # per entry, and a count never heard for none (a `who` of -1 picks the last)
     heard = np.where(sense.heard & sense.kin & ~sense.seed, relay.heard(said.pull), relay.NONE)
     heard = np.append(heard, relay.NONE)
     order = {tuple(way): index for index, way in enumerate(ways)}
-    chosen = np.zeros((n, len(ways)), dtype=bool)
     for index, way in enumerate(ways):
         mine = order[tuple(-way)]
         wins = np.ones(len(rows), dtype=bool)
