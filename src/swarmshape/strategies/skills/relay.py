@@ -28,7 +28,17 @@ def said(count: np.ndarray, cap: int) -> np.ndarray:
 
 def heard(field: np.ndarray) -> np.ndarray:
     """A broadcast count as a count, `NONE` where none was said."""
-    return np.where(field > 0, field - 1, NONE)
+    out = np.empty(field.shape, dtype=field.dtype)
+    _heard(np.ravel(field), out.reshape(-1))
+    return out
+
+
+@njit
+def _heard(field: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover (compiled)
+    """`heard` in one pass: numpy's compare, subtract and choice over the 240,000 entries of
+    the 10,000-robot S took 0.3 ms, five times a `mean-shift` step."""
+    for i in range(len(field)):
+        out[i] = field[i] - 1 if field[i] > 0 else NONE
 
 
 def relay(
