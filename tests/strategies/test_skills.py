@@ -14,6 +14,7 @@ from scipy import ndimage
 
 from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint
+from swarmshape.strategies.mean_shift import explore
 from swarmshape.strategies.mean_shift.explore import grey
 from swarmshape.strategies.skills import shape
 from swarmshape.strategies.skills.localise import roam
@@ -86,6 +87,27 @@ def test_the_square_round_each_frame_cell_holds_what_a_lookup_of_each_cell_gives
     assert np.array_equal(around.enclosed(every), (depth > 0) & ~inside)
     some = np.array([3, 17, 39])
     assert np.array_equal(around.depth(every[some], some), depth[some])
+
+
+def test_squares_taken_over_from_the_last_step_are_those_worked_out_afresh():
+    """`Around` takes over the last step's squares and works out again only the rows of
+    robots whose group or frame cell changed: the same squares as worked out for all."""
+    ring = np.argwhere(grid_from("##### #...# #.#.# #...# #####"))  # a sealed dot in it
+    blueprint = Blueprint.of([ring, np.argwhere(grid_from("#### #..#"))])
+    rng = np.random.default_rng(5)
+    groups, frame = rng.integers(0, 2, 40), rng.integers(-8, 8, (40, 2))
+    last = shape.Around(blueprint, groups, frame, 3)
+    for _ in range(3):
+        groups = np.where(rng.random(40) < 0.2, 1 - groups, groups)
+        frame = frame + rng.integers(-1, 2, (40, 2)) * (rng.random((40, 1)) < 0.3)
+        last = shape.Around(blueprint, groups, frame, 3, last)
+        fresh = shape.Around(blueprint, groups, frame, 3)
+        assert np.array_equal(last.inside, fresh.inside)
+        assert np.array_equal(last.depths, fresh.depths)
+        assert np.array_equal(last.sealed(explore.square(3)), fresh.sealed(explore.square(3)))
+    other = Blueprint.of([ring, np.argwhere(grid_from("## ##"))])  # a reshape: none taken over
+    fresh = shape.Around(other, groups, frame, 3)
+    assert np.array_equal(shape.Around(other, groups, frame, 3, last).depths, fresh.depths)
 
 
 def test_a_cell_beyond_the_square_worked_out_is_refused_not_wrapped_round():

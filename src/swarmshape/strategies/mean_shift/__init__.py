@@ -129,6 +129,10 @@ class MeanShift(Program):
         "round_to": Slot(np.int64, 0, 2, added=True),
     }
 
+    _around: shape.Around | None = None
+    """The last step's `shape.Around`, whose squares the next one takes over where robots
+    stood still."""
+
     @dataclass(frozen=True)
     class Options:
         entering: float = option(
@@ -187,7 +191,8 @@ class MeanShift(Program):
         base = frame + offset
         # the view's square, a cell round it for its cells' neighbours, and at least the two
         # cells' reach of a move and the cell beside that (`_moves`)
-        around = shape.Around(blueprint, group, frame, max(int(sense.radius) + 1, 3))
+        around = shape.Around(blueprint, group, frame, max(int(sense.radius) + 1, 3), self._around)
+        self._around = around
         inside = around.contains(offset)
         window = explore.Window(sense.radius)
         on_shape = localised & blueprint.contains(group, frame)

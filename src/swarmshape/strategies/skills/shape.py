@@ -33,16 +33,46 @@ class Around:
     either way: whether they are in its shape, their `depth`, and so whether they are
     `enclosed`, and whether they lie in a `sealed` piece, looked up by offsets from the frame
     cell ``(n, ..., 2)``. Worked out once a step: a program that looks up the same cells a
-    dozen times a step (`mean-shift`) spent a sixth of its step on the lookups."""
+    dozen times a step (`mean-shift`) spent a sixth of its step on the lookups.
 
-    def __init__(self, blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, reach: int):
+    The `last` of a step before (the same robots) lends its squares, which it gives up: only
+    the rows of robots whose group or frame cell has changed since are worked out again.
+    Worked out for every robot, they cost a 10,000-robot `mean-shift` step 1.5 ms, when most
+    of its robots stand still."""
+
+    inside: np.ndarray
+    """Per robot ``(n, side, side)``, its frame cell in the middle: in its shape or not."""
+    depths: np.ndarray
+    """The same square's `depth`s, for a compiled pass that looks up many (`_at`)."""
+
+    def __init__(
+        self,
+        blueprint: Blueprint,
+        groups: np.ndarray,
+        frame: np.ndarray,
+        reach: int,
+        last: Around | None = None,
+    ) -> None:
         self.reach = reach
-        self.inside = blueprint.contains_around(groups, frame, reach)
-        """Per robot ``(n, side, side)``, its frame cell in the middle: in its shape or not."""
-        self.depths = _depths(blueprint).around(groups, frame, reach)
-        """The same square's `depth`s, for a compiled pass that looks up many (`_at`)."""
-        sealed = _sealed(blueprint)
-        self._sealed = None if sealed is None else sealed.around(groups, frame, reach)
+        self._of = (blueprint, groups.copy(), frame.copy())
+        if (
+            last is None
+            or last.reach != reach
+            or last._of[0] is not blueprint
+            or len(last._of[1]) != len(groups)
+        ):
+            self.inside, self.depths, self._sealed = _squares(blueprint, groups, frame, reach)
+            return
+        _, last_groups, last_frame = last._of
+        rows = np.flatnonzero(
+            (last_groups != groups) | (last_frame[:, 0] != frame[:, 0])
+            | (last_frame[:, 1] != frame[:, 1])
+        )  # fmt: skip
+        inside, depths, sealed = _squares(blueprint, groups[rows], frame[rows], reach)
+        self.inside, self.depths, self._sealed = last.inside, last.depths, last._sealed
+        self.inside[rows], self.depths[rows] = inside, depths
+        if self._sealed is not None:
+            self._sealed[rows] = sealed
 
     def contains(self, offsets: np.ndarray) -> np.ndarray:
         return self._at(self.inside, offsets)
@@ -83,6 +113,19 @@ class Around:
         rows = np.arange(n) if robots is None else robots
         rows = rows.reshape(-1, *[1] * (index.ndim - 1)) * (side * side)
         return square.reshape(-1)[rows + index]
+
+
+def _squares(
+    blueprint: Blueprint, groups: np.ndarray, frame: np.ndarray, reach: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """`Around`'s squares round each frame cell: in the shape, depths, in a sealed piece (None
+    when no group's shape has one)."""
+    sealed = _sealed(blueprint)
+    return (
+        blueprint.contains_around(groups, frame, reach),
+        _depths(blueprint).around(groups, frame, reach),
+        None if sealed is None else sealed.around(groups, frame, reach),
+    )
 
 
 @functools.lru_cache(maxsize=4)
