@@ -291,8 +291,12 @@ class MeanShift(Program):
             rows = rows[on]
             memory.tour[rows] = (memory.tour[rows] + 1) % length[on]
             memory.toured[rows] += 1
-        _, length = shape.tour(blueprint, group, np.maximum(memory.tour, 0))
-        return quiet & (memory.tour >= 0) & (memory.toured < length)
+        rows = np.flatnonzero(quiet & (memory.tour >= 0))
+        touring = np.zeros(len(sense), dtype=bool)
+        touring[rows] = (
+            memory.toured[rows] < shape.tour(blueprint, group[rows], memory.tour[rows])[1]
+        )
+        return touring
 
     @staticmethod
     def _hops(

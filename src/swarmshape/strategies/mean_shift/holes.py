@@ -72,9 +72,9 @@ def open_holes(
         raise ValueError(f"a cell beside one looked at lies beyond {around.reach} cells")
     met = np.empty(cells.shape[:2], dtype=bool)
     empty = np.empty(cells.shape[:2], dtype=bool)
-    speaks, moving = sense.heard & sense.kin & ~sense.seed, said.stays == 0
     squares = (around.depths, around.inside, around.reach, view.bordered_taken, view.bordered_who)
-    _open_holes(*squares, view.reach, speaks, moving, cells, asked, met, empty)
+    senses = (sense.heard, sense.kin, sense.seed, said.stays)
+    _open_holes(*squares, view.reach, *senses, cells, asked, met, empty)
     return met, empty
 
 
@@ -86,17 +86,20 @@ def _open_holes(
     taken: np.ndarray,
     who: np.ndarray,
     sight: int,
-    speaks: np.ndarray,
-    moving: np.ndarray,
+    heard: np.ndarray,
+    kin: np.ndarray,
+    seed: np.ndarray,
+    stays: np.ndarray,
     cells: np.ndarray,
     asked: np.ndarray,
     met: np.ndarray,
     empty: np.ndarray,
 ) -> None:  # pragma: no cover (compiled)
     """`open_holes`, cell by cell, through `Around`'s squares (`reach` cells either way) and
-    `View`'s bordered ones (`sight`: beyond them lies the border, free and nobody's). As
-    numpy passes, four gathers a way cost a 10,000-robot `mean-shift` step 29 ms."""
-    last = 2 * sight + 2
+    `View`'s bordered ones (`sight`: beyond them lies the border, free and nobody's), with the
+    entry on a cell speaking (`heard`, `kin`, no `seed`) and moving (it said it `stays` not).
+    As numpy passes, four gathers a way cost a 10,000-robot `mean-shift` step 29 ms; whether
+    every entry speaks and moves, looked up for a few, 0.15 ms."""
     for robot in range(cells.shape[0]):
         for j in range(cells.shape[1]):
             met[robot, j] = empty[robot, j] = False
@@ -109,10 +112,10 @@ def _open_holes(
                 there = depth[robot, bx + reach, by + reach]
                 if there >= here or (bx == 0 and by == 0):
                     continue  # no way in: as deep, or the robot's own cell
-                vx = min(max(bx + sight + 1, 0), last)
-                vy = min(max(by + sight + 1, 0), last)
+                vx, vy = bordered(bx, by, sight)
                 entry = who[robot, vx, vy]
-                if entry >= 0 and speaks[entry] and (there == 0 or moving[entry]):
+                speaks = entry >= 0 and heard[entry] and kin[entry] and not seed[entry]
+                if speaks and (there == 0 or stays[entry] == 0):
                     met[robot, j] = True
                 pocket = there > 0 and not inside[robot, bx + reach, by + reach]
                 if not taken[robot, vx, vy] and not pocket:
