@@ -198,7 +198,7 @@ class MeanShift(Program):
         on_shape = localised & blueprint.contains(group, frame)
         outside = localised & ~inside
         shift, free = explore.mean_shift(sense, around, view, window, offset, outside)
-        sees = free.any(axis=1)
+        sees = explore.any_per_row(free)
         memory.news_hops, memory.news, memory.gone, memory.gone_age = holes.open_news(
             sense, frame, around, said, free, window.offsets, view, memory, cap
         )
@@ -351,8 +351,8 @@ class MeanShift(Program):
         _entered(view.bordered_taken, view.reach, around.inside, around.depths, around.reach,
                  offset, into, open_, in_shape, deeper)  # fmt: skip
         score = command @ ways.T
-        toward = np.where((~inside & across.any(axis=1))[:, None], across, toward)
-        wanted = np.where(toward.any(axis=1)[:, None], toward, score > 0)
+        toward = np.where((~inside & explore.any_per_row(across))[:, None], across, toward)
+        wanted = np.where(explore.any_per_row(toward)[:, None], toward, score > 0)
         outward = open_ & wanted
         # a hole robots coming in can reach is theirs; a robot on its way in takes one too
         # when the mean shift draws it there; a robot coming in beside a hole keeps it, and
@@ -367,15 +367,15 @@ class MeanShift(Program):
         to_pocket &= holes.pulled(sense, said, view, into, pull, cap)
         inward[pulling] = to_pocket[pulling]
         off_shape = open_ & ~in_shape & across
-        crossing = off_shape.any(axis=1)
+        crossing = explore.any_per_row(off_shape)
         inward[crossing] = off_shape[crossing]
         allowed = np.where(inside[:, None], inward, outward)
         best = 1 + np.argmax(np.where(allowed, score, -np.inf), axis=1)
-        moves = np.where(allowed.any(axis=1) & memory.localised, best, 0)
+        moves = np.where(explore.any_per_row(allowed) & memory.localised, best, 0)
         moves[sense.cruising & (moves != sense.heading)] = 0
         moves[~sense.ready & ~sense.cruising] = 0
         kept_waiting = memory.localised & ~inside & sense.ready & ~sense.cruising
-        kept_waiting &= wanted.any(axis=1) & ~outward.any(axis=1)
+        kept_waiting &= explore.any_per_row(wanted) & ~explore.any_per_row(outward)
         memory.waited = np.where(kept_waiting, memory.waited + 1, 0)
         rows = np.flatnonzero(memory.waited > self.options.patience)
         aside = np.where(open_[rows], rng.random((len(rows), len(ways))), -1.0)

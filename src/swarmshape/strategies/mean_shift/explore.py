@@ -83,11 +83,11 @@ def mean_shift(
     r = view.reach
     free = np.empty((n, len(offsets)), dtype=bool)
     _unoccupied(view.bordered_taken, r, around.inside, around.reach, offsets, base, free)
-    rows = np.flatnonzero(outside & free.any(axis=1))  # the others have no cell to reach
+    rows = np.flatnonzero(outside & any_per_row(free))  # the others have no cell to reach
     walls, side = view.taken_of(rows), 2 * r + 1
     reach = walkable(walls, np.take(base, rows, axis=0), offsets).reshape(len(rows), side * side)
     free[rows] &= np.take(reach, (offsets[:, 0] + r) * side + offsets[:, 1] + r, axis=1)
-    rows = np.flatnonzero(free.any(axis=1))  # for the others the shift is zero
+    rows = np.flatnonzero(any_per_row(free))  # for the others the shift is zero
     weight = np.where(np.take(free, rows, axis=0), window.weights(np.take(base, rows, axis=0)), 0.0)
     total = weight.sum(axis=1)
     sees = total > 0
@@ -120,6 +120,24 @@ def _unoccupied(
                 and not taken[robot, x + sight + 1, y + sight + 1]
                 and (x != base[robot, 0] or y != base[robot, 1])
             )
+
+
+def any_per_row(mask: np.ndarray) -> np.ndarray:
+    """``mask.any(axis=1)`` of a 2-D mask: numpy sets its reduction up row by row, 0.15 ms
+    over 10,000 robots' four moves, and `mean-shift` asks a dozen times a step."""
+    out = np.empty(len(mask), dtype=bool)
+    _any_per_row(mask, out)
+    return out
+
+
+@njit
+def _any_per_row(mask: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover (compiled)
+    for row in range(mask.shape[0]):
+        out[row] = False
+        for column in range(mask.shape[1]):
+            if mask[row, column]:
+                out[row] = True
+                break
 
 
 def walkable(walls: np.ndarray, base: np.ndarray, offsets: np.ndarray) -> np.ndarray:

@@ -141,7 +141,7 @@ def unwalled(
     carries it back. A rim hole whose neighbours on the rim are walled too stays open, and
     so does one deeper in whose shallower neighbours stalled robots hold."""
     # the few at rest beside a hole, then those of them beside one on the rim
-    robots = np.flatnonzero((holes & sense.ready[:, None]).any(axis=1))
+    robots = np.flatnonzero(explore.any_per_row(holes & sense.ready[:, None]))
     ways = np.take(base, robots, axis=0)[:, None, :] + STEPS[1:][None]
     walled = np.take(holes, robots, axis=0) & (around.depth(ways, robots) == 1)
     on_rim = walled.any(axis=1)
@@ -159,7 +159,9 @@ def unwalled(
     due = memory.walled >= SILENCE
     if not due.any():
         return due
-    met, empty = open_holes(sense, around, said, view, base[:, None, :], due.any(axis=1)[:, None])
+    met, empty = open_holes(
+        sense, around, said, view, base[:, None, :], explore.any_per_row(due)[:, None]
+    )
     mine = (around.depth(base) == 1) & (met | empty)[:, 0]
     return due & mine[:, None]
 
