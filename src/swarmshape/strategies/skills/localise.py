@@ -132,20 +132,21 @@ def _localise(
                 nearer = still and (anchor[e] < hops[r] or hops[r] == relay.NONE)
             if localised[r] and not (at_rest and nearer):
                 continue  # it has its cell and this entry has no vote: nothing to work out
-            hx, hy = STEPS[said_heading[e], 0], STEPS[said_heading[e], 1]
-            told = said_progress[e] / FIXED
-            along = (offset[e, 0] + mx) * hx + (offset[e, 1] + my) * hy
-            gone = np.mod(along - told, 1.0)
-            s = told + gone
+            rx, ry, moving = float(cell[e, 0]), float(cell[e, 1]), False
+            if said_heading[e] > 0:  # else it is on its cell: s * 0 moves it nowhere
+                hx, hy = STEPS[said_heading[e], 0], STEPS[said_heading[e], 1]
+                told = said_progress[e] / FIXED
+                along = (offset[e, 0] + mx) * hx + (offset[e, 1] + my) * hy
+                gone = np.mod(along - told, 1.0)
+                s = told + gone
+                rx, ry = cell[e, 0] + s * hx, cell[e, 1] + s * hy
+                moving = gone > WHOLE and gone < 1 - WHOLE
             if seed[e]:
                 rx, ry = float(seed_frame[e, 0]), float(seed_frame[e, 1])
-            else:
-                rx, ry = cell[e, 0] + s * hx, cell[e, 1] + s * hy
             ex, ey = rx - offset[e, 0] - mx, ry - offset[e, 1] - my
             x, y = np.rint(ex), np.rint(ey)
             if not (abs(ex - x) < WHOLE and abs(ey - y) < WHOLE):
                 continue
-            moving = said_heading[e] > 0 and gone > WHOLE and gone < 1 - WHOLE
             robot = not seed[e] and said_localised[e] == 1 and (stays[e] == 1 or moving)
             if not localised[r] and not found[r] and (robot or seed[e]):
                 frame[r, 0], frame[r, 1], found[r] = int(x), int(y), True
