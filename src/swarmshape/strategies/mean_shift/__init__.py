@@ -310,7 +310,10 @@ class MeanShift(Program):
         """Each robot's hops to the nearest of `sources`, from the `counts` its neighbours
         said (per entry; those `heard`), passed on by `relays` only: `cap` (none) for the
         others. Robots waiting in a pocket pull through robots on the shape, who alone can
-        carry a hole to them (`holes.pulled`)."""
+        carry a hole to them (`holes.pulled`). With no source and no count said, as in a shape
+        with no pocket, none is heard: the relay is skipped."""
+        if not sources.any() and not counts.any():
+            return np.full(len(sense), cap, dtype=np.int64)
         told = np.zeros((len(sense.owner), 0), dtype=np.int64)
         found = np.zeros((len(sense), 0), dtype=np.int64)
         hops, _ = relay.relay(sense, heard, relay.heard(counts), told, sources, found, cap)
