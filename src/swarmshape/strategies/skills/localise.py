@@ -174,9 +174,7 @@ def find_the_others(
     localised neighbour, stopping beside it to take their bearings; with none in sight,
     `roam`. Robots that do not know where they are tell each other nothing: a count of hops
     passed among them would only count up for ever where no localised robot is."""
-    kin = sense.heard & sense.kin
-    known = kin & (sense.seed | (said.localised == 1))
-    best = known_to(sense, known)
+    best = known_to(sense, said, np.flatnonzero(~memory.localised))
     lost = ~memory.localised & (best < 0)
     moves = roam(sense, memory.roam, lost, lambda robots, cells: view.at(robots, cells)[0],
                  turn_every, rng)  # fmt: skip
@@ -223,6 +221,16 @@ def roam(
     return moves
 
 
-def known_to(sense: Perception, known: np.ndarray) -> np.ndarray:
-    """Per robot, the entry of the nearest seed or localised neighbour it hears (-1: none)."""
-    return relay.best_per_robot(len(sense), sense.owner, np.zeros(len(known)), known)
+def known_to(sense: Perception, said: SimpleNamespace, robots: np.ndarray) -> np.ndarray:
+    """Per robot, the entry of the nearest seed or localised neighbour it hears (-1: none, and
+    for robots not among `robots`). Only their entries are looked through: once most robots
+    know where they are, a pass over every entry cost a 10,000-robot step 0.3 ms."""
+    counts = sense.start[robots + 1] - sense.start[robots]
+    entries = np.repeat(sense.start[robots] - np.cumsum(counts) + counts, counts)
+    entries += np.arange(len(entries))
+    known = sense.heard[entries] & sense.kin[entries]
+    known &= sense.seed[entries] | (said.localised[entries] == 1)
+    first = relay.best_per_robot(len(sense), sense.owner[entries], np.zeros(len(entries)), known)
+    best = np.full(len(sense), -1, dtype=np.int64)
+    best[first >= 0] = entries[first[first >= 0]]
+    return best
