@@ -194,7 +194,7 @@ class MeanShift(Program):
         around = shape.Around(blueprint, group, frame, max(int(sense.radius) + 1, 3), self._around)
         self._around = around
         inside = around.contains(offset)
-        window = explore.Window(sense.radius)
+        window = explore.window(sense.radius)
         on_shape = localised & blueprint.contains(group, frame)
         outside = localised & ~inside
         shift, free = explore.mean_shift(sense, around, view, window, offset, outside)

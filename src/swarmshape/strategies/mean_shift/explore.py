@@ -63,6 +63,12 @@ class Window:
         return np.take(nine, (base[:, 0] + 1) * 3 + base[:, 1] + 1, axis=0)
 
 
+@functools.lru_cache(maxsize=4)
+def window(radius: float) -> Window:
+    """The `Window` of a sensing radius, worked out once: each step it took 0.15 ms."""
+    return Window(radius)
+
+
 def mean_shift(
     sense: Perception,
     around: Around,
