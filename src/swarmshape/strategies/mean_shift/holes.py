@@ -49,7 +49,7 @@ from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Perception
 from swarmshape.strategies.mean_shift import explore
 from swarmshape.strategies.skills import relay, shape
-from swarmshape.strategies.skills.view import SILENCE, View, bordered
+from swarmshape.strategies.skills.view import SILENCE, View
 
 
 def open_holes(
@@ -112,7 +112,7 @@ def _open_holes(
                 there = depth[robot, bx + reach, by + reach]
                 if there >= here or (bx == 0 and by == 0):
                     continue  # no way in: as deep, or the robot's own cell
-                vx, vy = bordered(bx, by, sight)
+                vx, vy = _bordered(bx, by, sight)
                 entry = who[robot, vx, vy]
                 speaks = entry >= 0 and heard[entry] and kin[entry] and not seed[entry]
                 if speaks and (there == 0 or stays[entry] == 0):
@@ -120,6 +120,16 @@ def _open_holes(
                 pocket = there > 0 and not inside[robot, bx + reach, by + reach]
                 if not taken[robot, vx, vy] and not pocket:
                     empty[robot, j] = True
+
+
+@njit
+def _bordered(x: int, y: int, sight: int) -> tuple[int, int]:  # pragma: no cover (compiled)
+    """Where a cell relative to a robot's own lies in `View`'s bordered squares (`sight`
+    cells either way): a cell beyond them lands on the border, free and nobody's. (As
+    `View.at` looks; a kernel of this module, so that numba's cache of the kernels calling
+    it follows its changes: it does not follow another module's.)"""
+    last = 2 * sight + 2
+    return min(max(x + sight + 1, 0), last), min(max(y + sight + 1, 0), last)
 
 
 def unwalled(
@@ -416,7 +426,7 @@ def _freshest(
                 if not speaks[e] or hops[e] != least:
                     continue
                 x, y = news[e, 0], news[e, 1]
-                vx, vy = bordered(x - frame[robot, 0], y - frame[robot, 1], sight)
+                vx, vy = _bordered(x - frame[robot, 0], y - frame[robot, 1], sight)
                 fresh = not taken[robot, vx, vy]
                 if (
                     fresh

@@ -118,18 +118,12 @@ def _look(
     """`View.at`: a look beyond the window lands on the border, which is free. A free cell's
     entry is -1 without reading it: the squares are out of the cache by the time a program
     looks, and the reads of `who` made the look three times as slow."""
+    last = 2 * reach + 2
     for k in range(len(robots)):
-        x, y = bordered(cells[k, 0], cells[k, 1], reach)
+        x = min(max(cells[k, 0] + reach + 1, 0), last)
+        y = min(max(cells[k, 1] + reach + 1, 0), last)
         seen[k] = taken[robots[k], x, y]
         entry[k] = who[robots[k], x, y] if seen[k] else -1
-
-
-@njit
-def bordered(x: int, y: int, reach: int) -> tuple[int, int]:  # pragma: no cover (compiled)
-    """Where a cell relative to a robot's own lies in its bordered squares (`View`): a cell
-    beyond its window lands on the border, which is free."""
-    last = 2 * reach + 2
-    return min(max(x + reach + 1, 0), last), min(max(y + reach + 1, 0), last)
 
 
 def paths(blocked: np.ndarray, sources: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
