@@ -183,6 +183,23 @@ def test_a_wanderer_the_structure_grew_round_joins_where_it_stands():
     assert swarm.overlap_total == 0
 
 
+@pytest.mark.parametrize("rotation", [90, 270])
+def test_two_followers_stopping_at_once_never_wall_a_free_cell_in(tmp_path, rotation):
+    """Found turning a scenario's frame: the K at 16 cells turned a quarter, seed 3. Two
+    followers stopped in the same step beside the same free cell, each taking the other for a
+    robot passing by, and walled it in: 130 of 131 cells for good. One whose stop would wall
+    it in if a follower at rest beside it that goes first stopped too now waits a step for
+    that one's word."""
+    scenario = tmp_path / "turned.toml"
+    scenario.write_text(
+        f"[[groups]]\nshape = '{SHAPES / 'letter-k.png'}'\ncells = 16\n"
+        f"pose = {{ x = 30, y = 25, rotation = {rotation} }}\n"
+    )
+    swarm = run(build(configure(scenario, strategy="self-assembly", seed=3)), max_steps=20_000)
+    assert swarm.complete
+    assert swarm.overlap_total == 0
+
+
 def test_a_robot_never_stops_where_the_free_cells_beside_it_may_part():
     """Robots arriving round the structure from everywhere at once closed pockets longer than
     a robot's window sees whole (the S at 18 cells, seed 7: three cells walled in, 98.9 % for
