@@ -29,7 +29,8 @@ on until it hears the structure (`localise.roam`), then heads for it.
   would leave the shape, or when a 4-adjacent joined robot has a gradient at least its own (the
   end of the layer being built); on the lattice, also at a dead end (walls ahead and on both
   hands), and not where it would wall free cells of the shape off (`_pockets`, `_onward`: it
-  moves on into them instead).
+  moves on into them instead), nor, while a follower beside it that goes first might stop
+  too, where their two stops would (it waits for that one).
 
 As in the paper, shapes with holes cannot be formed (the runner warns), and errors in gradient
 and position warp the shape more the farther it grows from the seeds.
@@ -603,7 +604,7 @@ def _follow(view: _View, sense: _Where, memory: Memory, moves: np.ndarray) -> No
     way[hold] = 0
     blocked = view.taken[rows, AHEAD[way]]
     cells = np.array([len(c) for c in sense.blueprint.cells], dtype=np.int64)[sense.group]
-    lost = ~join & (memory.travelled > 32 * np.sqrt(cells) + 100)
+    lost = ~join & ~hold & (memory.travelled > 32 * np.sqrt(cells) + 100)
     # one under way goes on only straight on, and joins or stops once on the cell, at rest
     cruise = going & view.coming & ~join & ~lost & (way == sense.heading)
     join &= resting
