@@ -188,8 +188,8 @@ def test_two_followers_stopping_at_once_never_wall_a_free_cell_in(tmp_path, rota
     """Found turning a scenario's frame: the K at 16 cells turned a quarter, seed 3. Two
     followers stopped in the same step beside the same free cell, each taking the other for a
     robot passing by, and walled it in: 130 of 131 cells for good. One whose stop would wall
-    it in if a follower at rest beside it that goes first stopped too now waits a step for
-    that one's word."""
+    it in if a follower at rest beside it that goes first stopped too now waits while that
+    one stands there."""
     scenario = tmp_path / "turned.toml"
     scenario.write_text(
         f"[[groups]]\nshape = '{SHAPES / 'letter-k.png'}'\ncells = 16\n"
