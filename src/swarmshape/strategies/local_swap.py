@@ -1201,7 +1201,12 @@ def _choose_partner(
     out, which gives up its cell and goes on out. A trade that shortens the summed distance is
     agreed with a neighbour on the move too (both hold still for it): two robots that met
     head-on in a corridor each stepped aside for the other, in step, and never once both stood
-    still to trade. A robot never trades for a goal it knows a third robot rests on (see
+    still to trade. A robot on its way to its goal trades with one resting on its own goal
+    beside it and toward its goal even when it could walk round it (Wang and Rubenstein's
+    swap when blocked): the goal passes into the formed robots, each of them a cell nearer
+    it, instead of its robot walking round the shape's edge at a stop on every cell (the
+    1,018-robot S, seeds 0 to 4: 868 to 1,770 steps before, 667 to 922 after). A robot never
+    trades for a goal it knows a third robot rests on (see
     `_held_twice`), nor, resting on its own goal, for one it sees a robot on that it does not
     hear (`_silent_cells`): a robot that held a goal under a stalled robot traded it into the
     formed shape, whose robot then left its cell for it.
@@ -1273,8 +1278,9 @@ def _partners(
         beside = abs(tx - mx) + abs(ty - my) == 1
         blocked = (my_has or seeking[m]) and preferred[m] == 0 and abs(wx) + abs(wy) > 0
         ahead = np.sign(tx - mx) * np.sign(wx) > 0 or np.sign(ty - my) * np.sign(wy) > 0
-        in_the_way = blocked and beside and ahead
         resting_there = their_has and tx == tgx and ty == tgy
+        walking = my_has and abs(wx) + abs(wy) > 0
+        in_the_way = (blocked or (walking and resting_there)) and beside and ahead
         push = in_the_way and resting_there and not my_has
         push = push and (msg[e, OPEN_HOPS] <= PUSH_HOPS or leaving[m])
         push = push and (calling[m] or pushed_on[m] or leaving[m])  # on down the chain
