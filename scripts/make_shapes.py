@@ -39,6 +39,14 @@ def star(size: int = 512, points: int = 5) -> Image.Image:
     return image
 
 
+def disc(size: int = 512) -> Image.Image:
+    """The round shape the benchmarks use: no corners, arms or holes, so what a strategy
+    costs on it is the swarm's own traffic."""
+    image = Image.new("L", (size, size), PAPER)
+    ImageDraw.Draw(image).ellipse((8, 8, size - 8, size - 8), fill=INK)
+    return image
+
+
 def ring(size: int = 512) -> Image.Image:
     """A dark ring on a transparent canvas: exercises alpha and a shape with a hole."""
     image = Image.new("RGBA", (size, size), (0, 0, 0, 0))
@@ -103,6 +111,7 @@ def main() -> None:
     )
     star().save(SHAPES / "star.png")
     ring().save(SHAPES / "ring.png")
+    disc().save(SHAPES / "disc.png")
     letter_s().save(SHAPES / "letter-s.png")
     cells(50, 20, [(0, 0, 49, 19)]).save(SHAPES / "block.png")
     silhouette = horse()
