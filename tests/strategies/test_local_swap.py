@@ -15,6 +15,9 @@ from swarmshape.core.faults import FaultEvent
 from swarmshape.core.local import Memory
 from swarmshape.core.metrics import run_metrics
 from swarmshape.core.perception import Blueprint, Perception
+from swarmshape.core.shape import Shape
+from swarmshape.core.swarm import Swarm
+from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import local_swap
 from tests.conftest import SHAPES, grid_from, make_swarm, script, world_of
@@ -74,9 +77,11 @@ def _wants_at_rest(
     goals: np.ndarray,
     asked_before: np.ndarray,
     numbers: np.ndarray | None = None,
+    preferred: np.ndarray | None = None,
 ) -> np.ndarray:
     """The partners (by number) that robots at rest on `cells`, all in touch, holding `goals`
-    and blocked, want; each asked last step for the one numbered `asked_before`."""
+    and blocked (or with the way round their planner `preferred`), want; each asked last step
+    for the one numbered `asked_before`."""
     n = len(cells)
     numbers = np.arange(n) if numbers is None else numbers
     program = local_swap.LocalSwap()
@@ -101,10 +106,54 @@ def _wants_at_rest(
         blueprint=Blueprint.of([goals]), step=1, radius=3.0,
     )  # fmt: skip
     nobody = np.zeros(0, dtype=np.int64)
+    preferred = np.zeros(n, dtype=np.int64) if preferred is None else preferred
     return local_swap._choose_partner(
-        sense, memory, np.zeros(n, dtype=np.int64), goals, np.zeros(n, dtype=bool),
+        sense, memory, preferred, goals, np.zeros(n, dtype=bool),
         goals, np.full(n, local_swap.FAR), nobody, nobody,
     )  # fmt: skip
+
+
+@pytest.mark.parametrize("resting", [True, False])
+def test_a_robot_on_its_way_asks_the_robot_resting_on_its_goal_in_its_way(resting):
+    """Wang and Rubenstein's swap when blocked, even with a way round: the 1,018-robot S (seed
+    2) waited 400 steps for a robot walking round the letter to a goal across its formed
+    part, while it passed robots resting on their goals that it could have traded with. A
+    robot in the way that is not on its own goal is walked round, as before."""
+    cells = np.array([(0, 0), (0, 1)])
+    goals = np.array([(0, 5), (0, 1) if resting else (3, 3)])
+    wants = _wants_at_rest(cells, goals, np.array([-1, -1]), preferred=np.array([1, 0]))
+    assert wants[0] == (1 if resting else -1)
+
+
+def test_robots_without_bearings_that_hear_a_hop_count_wait_for_them():
+    """They wait where they are for the bearings to spread to them: following their neighbours
+    toward the localised robots, the 1,018-robot S's robots walked a third of the run's
+    distance before they knew where they were going."""
+    swarm = build(configure(SHAPES / "letter-s.png", strategy="local-swap", seed=0, cells=14))
+    runner, memory = Runner(swarm), swarm.driver.memory
+    waited = 0
+    while swarm.step_count < 60:
+        runner.step()
+        hearing = ~memory.localised & (swarm.driver.broadcast[:, local_swap.HOPS] < local_swap.FAR)
+        assert (memory.asked[hearing] == 0).all(), swarm.step_count
+        waited += hearing.sum()
+    assert waited > 0
+    assert memory.localised.all()
+
+
+def test_robots_cut_off_from_the_rest_set_out_to_look_for_them():
+    """Two robots together in a far corner, out of range of everyone, hear no hop count: they
+    wait no longer than the count would take to cross a swarm of their shape's size, then roam
+    until they find the others. Waiting while they sensed each other, such pairs waited on
+    each other for good."""
+    square = Shape(grid_from("### ### ###"))  # on cells (1, 1) to (3, 3), seeds beside it
+    world = build_world([GroupSpec("test", square, (200, 60, 60))], arena=(40, 40))
+    near = [(5, 1), (5, 2), (5, 3), (6, 1), (6, 2), (6, 3), (7, 2)]
+    corner = [(38, 38), (38, 37)]
+    swarm = Swarm(world, strategies.create("local-swap"), 1, start=np.array(near + corner))
+    swarm = run(swarm, max_steps=5000)
+    assert swarm.complete
+    assert swarm.overlap_total == 0
 
 
 @settings(max_examples=50, deadline=None)
