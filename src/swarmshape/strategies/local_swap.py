@@ -389,13 +389,25 @@ def _route(
     """The cell each robot plans toward: its target, or for a robot outside the shape that
     made no headway for `STUCK` steps, a cell a few steps along its way round the shape to
     it (`routes`). It keeps to the route while its target stays the same: back on
-    the direct way, it walked straight back to where it was stuck."""
+    the direct way, it walked straight back to where it was stuck. A robot that sees robots
+    it does not hear routes round their cells too (`routes.waypoint_round`): a stalled robot
+    stands there for good, and the last open cell of a small shape, walled in by the seeds, a
+    stalled robot and a robot resting on its goal, waited 2,000 steps for a seeker whose way
+    round the bitmap led through the stalled robot, where it turned back and forth."""
     kept = memory.routed & same_aim
     outside = ~sense.blueprint.contains(sense.group, memory.frame)
     rows = np.flatnonzero(ready & outside & (kept | (memory.stuck > STUCK)))
     cells, found = routes.waypoints(
         sense.blueprint, sense.group[rows], memory.frame[rows], target[rows], int(radius)
     )
+    unheard = np.flatnonzero(~sense.heard & ~sense.seed & np.isin(sense.owner, rows))
+    silent = memory.frame[sense.owner[unheard]] + _cells(sense)[unheard]
+    for row in np.unique(sense.owner[unheard]).tolist():
+        at = rows == row
+        cells[at], found[at] = routes.waypoint_round(
+            sense.blueprint, int(sense.group[row]), memory.frame[row], target[row],
+            int(radius), silent[sense.owner[unheard] == row],
+        )  # fmt: skip
     memory.routed = np.where(ready, False, kept)
     memory.routed[rows[found]] = True
     waypoint = target.copy()
