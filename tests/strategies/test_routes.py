@@ -181,3 +181,25 @@ def test_the_distinct_goal_cells_come_in_the_order_and_with_the_index_of_a_row_w
     expected, inverse = np.unique(cells, axis=0, return_inverse=True)
     assert np.array_equal(ends, expected) and ends.dtype == expected.dtype
     assert np.array_equal(which.reshape(-1), inverse.reshape(-1))
+
+
+def test_a_route_round_walls_never_steps_on_them():
+    """A robot routes round robots it sees but does not hear (a stalled one stands there for
+    good): the way round the U to its floor's middle (below it, straight up through one
+    shape cell) goes through the wall there first, and round it with the wall."""
+    shape = blueprint_of(U)
+    start, target = (3, 5), (3, 3)  # below the U's floor, its middle cell just above
+    wall = np.array([(3, 4)])
+    straight, _ = routes.waypoints(
+        shape, np.zeros(1, int), np.array([start]), np.array([target]), 1
+    )
+    assert tuple(straight[0]) == (3, 4)
+    at, path = np.array(start), [start]
+    for _ in range(20):
+        at, found = routes.waypoint_round(shape, 0, at, np.array(target), 1, wall)
+        assert found
+        path.append(tuple(int(v) for v in at))
+        if path[-1] == target:
+            break
+    assert path[-1] == target
+    assert (3, 4) not in path
