@@ -341,16 +341,15 @@ def _guides(sense: Perception) -> np.ndarray:
     walking to their goals stayed nowhere, and before 90 % of the 98-robot S had reached their
     goals, 45 % of the steps of those still on their way went to robots without bearings.
 
-    A robot without bearings that hears a hop count to robots with them waits where it is
-    (one that hears none roams, `_roam`): bearings spread from the seeds through robots at
-    rest, a ring of neighbours a step or two, faster than a robot walks. Following its
-    neighbours toward the localised ones instead, the robots walked a third of the run's
-    distance before they knew where they were going (24,834 of the 70,407 cells walked in the
-    1,018-robot S, seed 1; now 2,406 of 48,575, and a robot has its bearings at step 36 on
-    average, against 88), and at the scattered swarm's far edge the robots with
-    bearings walked on to their goals faster than the last ones without them followed: one
-    group lost the hop count 150 steps in, roamed the empty arena, and came upon the formed
-    shape a thousand steps later."""
+    A robot without bearings that hears a hop count to robots with them waits where it is (one
+    that hears none roams, `_roam`): bearings spread from the seeds through robots at rest, a
+    ring of neighbours a step or two, faster than a robot walks. Following its neighbours
+    toward the localised ones instead, the robots walked a third of the run's distance before
+    they knew where they were going (24,834 of the 70,407 cells walked in the 1,018-robot S,
+    seed 1; now 2,406 of 48,575, and a robot has its bearings at step 36 on average, against
+    88), and at the scattered swarm's far edge the robots with bearings walked on to their
+    goals faster than the last ones without them followed: one group lost the hop count 150
+    steps in, roamed the empty arena, and came upon the formed shape a thousand steps later."""
     lost = sense.heard & sense.kin & ~sense.seed & (sense.message[:, LOCALISED] == 0)
     near = np.zeros(len(sense), dtype=bool)
     near[sense.owner[lost]] = True
@@ -1417,15 +1416,14 @@ def _roam(
     roaming: np.ndarray,
     rng: np.random.Generator,
 ) -> np.ndarray:
-    """Moves of robots that have heard of no localised robot for long (`_unheard_too_long`):
-    on the way the hop count last led them (`_hops`), straight on until blocked (a wall shows
-    as a move that failed), then a new random way, and a new random way every `ROAM` cells or
-    so. A straight walk crosses the
-    arena in its width; a random walk needs its area squared, which left small swarms in big
-    arenas searching for tens of thousands of steps. Without the turns a robot that met the
-    arena's wall went round along it for good. The way is chosen only at rest: a robot on
-    the move senses its neighbours from between two cells. Under way it stops to turn with
-    the same chance a cell (see `act`)."""
+    """Moves of robots that have heard of no localised robot for long (`_unheard_too_long`): on
+    the way the hop count last led them (`_hops`), straight on until blocked (a wall shows as a
+    move that failed), then a new random way, and a new random way every `ROAM` cells or so. A
+    straight walk crosses the arena in its width; a random walk needs its area squared, which
+    left small swarms in big arenas searching for tens of thousands of steps. Without the turns
+    a robot that met the arena's wall went round along it for good. The way is chosen only at
+    rest: a robot on the move senses its neighbours from between two cells. Under way it stops
+    to turn with the same chance a cell (see `act`)."""
     rows = np.flatnonzero(roaming & sense.ready)
     way = memory.roam[rows]
     turn = (way == 0) | occupied[rows, way] | (rng.random(len(rows)) < 1 / ROAM)
