@@ -399,7 +399,10 @@ def _route(
     cells, found = routes.waypoints(
         sense.blueprint, sense.group[rows], memory.frame[rows], target[rows], int(radius)
     )
-    unheard = np.flatnonzero(~sense.heard & ~sense.seed & np.isin(sense.owner, rows))
+    routing = np.zeros(len(sense), dtype=bool)
+    routing[rows] = True
+    unheard = np.flatnonzero(~sense.heard & ~sense.seed)  # none without lost messages or stalls
+    unheard = unheard[routing[sense.owner[unheard]]]
     silent = memory.frame[sense.owner[unheard]] + _cells(sense)[unheard]
     for row in np.unique(sense.owner[unheard]).tolist():
         at = rows == row
