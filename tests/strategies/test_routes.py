@@ -163,7 +163,10 @@ def test_route_fields_are_what_dijkstras_method_gives_on_the_same_graph(rows, co
     start = data.draw(st.integers(0, rows * columns - 1))
     expected = scipy_field(cost, seeds, start, columns)
     field = np.full(rows * columns, -1.0)  # written over whole
-    routes._cheapest(cost, seeds, start, columns, field)
+    bordered = np.pad(cost.reshape(rows, columns), 1, constant_values=1.0).ravel()
+    walls = np.pad(seeds.reshape(rows, columns), 1, constant_values=True).ravel()
+    inside = (start // columns + 1) * (columns + 2) + start % columns + 1
+    routes._cheapest(bordered, walls, inside, columns + 2, field)
     assert np.array_equal(field, expected)
 
 

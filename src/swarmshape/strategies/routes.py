@@ -170,17 +170,19 @@ def _fewest_crossed(blueprint: Blueprint, group: int) -> np.ndarray:
 
 @functools.lru_cache(maxsize=16)
 def _step_costs(blueprint: Blueprint, group: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per cell of the box, row by row, what a route pays to step onto it: 1 onto a free
-    cell, onto a shape cell more than any way round through free cells (the box's cell
-    count), so a route crosses as few shape cells as it can; and which cells are seeds, never
-    crossed."""
+    """Per cell of the box and a border one cell wide round it, row by row, what a route pays
+    to step onto it: 1 onto a free cell, onto a shape cell more than any way round through
+    free cells (the box's cell count), so a route crosses as few shape cells as it can; and
+    which cells are walls, never crossed: the seeds and the border (`_cheapest`)."""
     low, size = _box(blueprint, group)
-    shape = np.zeros(size, dtype=bool)
-    cells = blueprint.cells[group] - low
+    shape = np.zeros(size + 2, dtype=bool)
+    cells = blueprint.cells[group] - low + 1
     shape[cells[:, 0], cells[:, 1]] = True
-    seeds = np.zeros(size, dtype=bool)
-    seeds[SEED_CELLS[:, 0] - low[0], SEED_CELLS[:, 1] - low[1]] = True
-    return np.where(~shape & ~seeds, 1.0, float(shape.size)).ravel(), seeds.ravel()
+    walls = np.ones(size + 2, dtype=bool)
+    walls[1:-1, 1:-1] = False
+    walls[SEED_CELLS[:, 0] - low[0] + 1, SEED_CELLS[:, 1] - low[1] + 1] = True
+    cost = np.where(shape, float(size.prod()), 1.0)
+    return cost.ravel(), walls.ravel()
 
 
 FIELD_BYTES = 1 << 29
@@ -301,30 +303,34 @@ def _field(
     if not ((local >= 0) & (local < size)).all():
         field[:] = np.inf
         return field
-    cost, seeds = _step_costs(blueprint, group)
+    cost, blocked = _step_costs(blueprint, group)
+    width = int(size[1]) + 2
     if walls is not None:
-        inside = walls[((walls >= 0) & (walls < size)).all(axis=1)]
-        seeds = seeds.copy()
-        seeds[inside[:, 0] * size[1] + inside[:, 1]] = True
-    _cheapest(cost, seeds, int(local[0] * size[1] + local[1]), int(size[1]), field)
+        inside = walls[((walls >= 0) & (walls < size)).all(axis=1)] + 1
+        blocked = blocked.copy()
+        blocked[inside[:, 0] * width + inside[:, 1]] = True
+    _cheapest(cost, blocked, int((local[0] + 1) * width + local[1] + 1), width, field)
     return field
 
 
 @njit
 def _cheapest(
-    cost: np.ndarray, seeds: np.ndarray, start: int, columns: int, best: np.ndarray
+    cost: np.ndarray, walls: np.ndarray, start: int, width: int, best: np.ndarray
 ) -> None:  # pragma: no cover (compiled)
-    """Per cell of a box laid out row by row, `columns` wide, the least cost of a path of
-    steps between side neighbours to `start` (inf: none), paying the `cost` of every cell on
-    it, both ends too, never into or out of a seed, written into `best`. Dijkstra's method,
-    with its frontier kept in three queues instead of a heap: every step costs 1 or the cost
-    of a shape cell, which is more than any run of free cells, so the frontier falls into
-    levels by shape cells crossed, each walked breadth first, and each queue stays in order of
-    cost by itself. scipy's Dijkstra on the same graph took eight times as long, and the
-    fields are the same."""
+    """Per cell of a box laid out row by row, the least cost of a path of steps between side
+    neighbours to `start` (inf: none), paying the `cost` of every cell on it, both ends too,
+    never into or out of a wall, written into `best`. `cost` and `walls` cover the box and a
+    border of walls one cell wide round it, `width` cells a row (`best` the box alone): with
+    the border a step needs no test for the box's edges, and a field took 92 us instead of
+    118 us on the 10,000-robot letter S's box. Dijkstra's method, with its frontier kept in
+    three queues instead of a heap: every step costs 1 or the cost of a shape cell, which is
+    more than any run of free cells, so the frontier falls into levels by shape cells
+    crossed, each walked breadth first, and each queue stays in order of cost by itself.
+    scipy's Dijkstra on the same graph took eight times as long, and the fields are the
+    same."""
     n = len(cost)
-    best[:] = np.inf
-    best[start] = 0.0
+    paid_at = np.full(n, np.inf)  # `best` over the bordered box, less each cell's own cost
+    paid_at[start] = 0.0
     room = 4 * n + 1  # a cell enters a queue at most once from each neighbour
     level, level_cost = np.empty(room, dtype=np.int64), np.empty(room)  # reached crossing in
     walk, walk_cost = np.empty(room, dtype=np.int64), np.empty(room)  # walked on in the level
@@ -339,19 +345,15 @@ def _cheapest(
             else:
                 cell, paid = walk[walked], walk_cost[walked]
                 walked += 1
-            if paid > best[cell] or seeds[cell]:
-                continue  # reached more cheaply since, or a seed (the start may be one)
+            if paid > paid_at[cell] or walls[cell]:
+                continue  # reached more cheaply since, or a wall (the start may be a seed)
             onward = paid + cost[cell]
-            row, column = cell // columns, cell % columns
-            for other, there in (
-                (cell - columns, row > 0),
-                (cell + columns, cell + columns < n),
-                (cell - 1, column > 0),
-                (cell + 1, column < columns - 1),
-            ):
-                if there and not seeds[other] and onward < best[other]:
-                    best[other] = onward
-                    if cost[cell] == 1.0:
+            free = cost[cell] == 1.0
+            for step in (-width, width, -1, 1):
+                other = cell + step
+                if not walls[other] and onward < paid_at[other]:
+                    paid_at[other] = onward
+                    if free:
                         walk[in_walk], walk_cost[in_walk] = other, onward
                         in_walk += 1
                     else:
@@ -360,4 +362,6 @@ def _cheapest(
         level, deeper = deeper, level
         level_cost, deeper_cost = deeper_cost, level_cost
         in_level = in_deeper
-    best += cost
+    paid_at += cost
+    inside = paid_at.reshape(n // width, width)[1:-1, 1:-1]
+    best.reshape(inside.shape)[:] = inside
