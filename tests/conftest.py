@@ -21,6 +21,7 @@ from types import ModuleType
 import numpy as np
 import pytest
 from hypothesis import settings
+from scipy import ndimage
 
 from swarmshape.core.shape import Shape
 from swarmshape.core.swarm import Swarm
@@ -137,6 +138,21 @@ def shapes() -> Path:
 def grid_from(text: str) -> np.ndarray:
     """A grid from rows of '#' (ink) and '.' (empty)."""
     return np.array([[c == "#" for c in row] for row in text.split()], dtype=bool)
+
+
+def dilated(blocked: np.ndarray, sources: np.ndarray) -> np.ndarray:
+    """The fewest moves between side neighbours from `sources` to each cell of one square,
+    round its `blocked` cells (-1: none; a source may be blocked), a scipy dilation a level:
+    the plain way that local programs' compiled breadth-first passes must agree with."""
+    sides = ndimage.generate_binary_structure(2, 1)
+    steps = np.where(sources, 0, -1)
+    front, reached, level = sources, sources, 0
+    while front.any():
+        level += 1
+        front = ndimage.binary_dilation(front, sides) & ~blocked & ~reached
+        steps[front] = level
+        reached = reached | front
+    return steps
 
 
 def world_of(shape: np.ndarray | Shape, agents: int | None = None) -> World:

@@ -14,13 +14,14 @@ from swarmshape.config import configure
 from swarmshape.core.faults import FaultEvent
 from swarmshape.core.local import Memory
 from swarmshape.core.metrics import run_metrics
+from swarmshape.core.motion import STEPS
 from swarmshape.core.perception import Blueprint, Perception
 from swarmshape.core.shape import Shape
 from swarmshape.core.swarm import Swarm
 from swarmshape.core.world import GroupSpec, build_world
 from swarmshape.runs import Runner, build, run
 from swarmshape.strategies import local_swap
-from tests.conftest import SHAPES, grid_from, make_swarm, script, world_of
+from tests.conftest import SHAPES, dilated, grid_from, make_swarm, script, world_of
 
 
 def test_goal_less_robots_find_their_way_round_to_open_cells_with_messages_lost():
@@ -111,6 +112,62 @@ def _wants_at_rest(
         sense, memory, preferred, goals, np.zeros(n, dtype=bool),
         goals, np.full(n, local_swap.FAR), nobody, nobody,
     )  # fmt: skip
+
+
+@settings(max_examples=60, deadline=None)  # the first example compiles the kernel
+@given(st.integers(0, 2**32 - 1), st.floats(1.0, 4.5), st.floats(0.0, 0.7))
+def test_a_robot_plans_its_first_step_on_a_shortest_way_to_the_free_cell_nearest_its_goal(
+    seed, radius, crowd
+):
+    """`_plan` against the plain way: each robot's square within its sensing radius, blocked
+    where it senses a neighbour or `occupied` says, distances by scipy's dilation; the cell
+    nearest the goal, then fewest moves, the first in row order; the first move of the way
+    there through the first cell, in move order, a move nearer; none if no cell is nearer the
+    goal than its own, or it is not going or not at rest."""
+    rng = np.random.default_rng(seed)
+    n, reach = 6, int(radius)
+    side = 2 * reach + 1
+    counts = rng.integers(0, 2 * side, n)
+    start = np.concatenate([[0], np.cumsum(counts)])
+    owner = np.repeat(np.arange(n), counts)
+    offset = rng.uniform(-reach - 1.4, reach + 1.4, (len(owner), 2))
+    offset[rng.random(len(owner)) > crowd] = 9.0  # most out of sight: a square is mostly free
+    delta = rng.integers(-2 * side, 2 * side + 1, (n, 2))
+    occupied = rng.random((n, len(STEPS))) < crowd / 2
+    going, ready = rng.random(n) < 0.8, rng.random(n) < 0.8
+    nobody = np.zeros((len(owner), 2), dtype=np.int64)
+    sense = Perception(
+        number=np.arange(n), group=np.zeros(n, dtype=np.int64), ready=ready,
+        heading=np.zeros(n, dtype=np.int64), cruising=np.zeros(n, dtype=bool),
+        progress=np.zeros(n), moved=np.zeros((n, 2), dtype=np.int64), start=start, owner=owner,
+        offset=offset, seed=np.zeros(len(owner), dtype=bool), kin=np.ones(len(owner), dtype=bool),
+        heard=np.ones(len(owner), dtype=bool), message=nobody, seed_frame=nobody,
+        blueprint=Blueprint.of([np.zeros((1, 2), dtype=np.int64)]), step=1, radius=radius,
+    )  # fmt: skip
+    chosen, _ = local_swap._plan(sense, delta, occupied, going, radius)
+    span = np.arange(-reach, reach + 1)
+    x, y = np.meshgrid(span, span, indexing="ij")
+    for r in range(n):
+        blocked = np.hypot(x, y) > radius
+        sat = np.rint(offset[owner == r]).astype(int)
+        sat = sat[(np.abs(sat) <= reach).all(axis=1)]
+        blocked[sat[:, 0] + reach, sat[:, 1] + reach] = True
+        for move in np.flatnonzero(occupied[r])[np.flatnonzero(occupied[r]) > 0]:
+            blocked[STEPS[move, 0] + reach, STEPS[move, 1] + reach] = True
+        sources = (x == 0) & (y == 0)
+        steps = dilated(blocked, sources)
+        left = np.abs(delta[r, 0] - x) + np.abs(delta[r, 1] - y)
+        score = np.where(steps >= 0, left * side * side + steps, np.iinfo(np.int64).max)
+        at = np.unravel_index(score.argmin(), score.shape)
+        expected = 0
+        if going[r] and ready[r] and left[at] < np.abs(delta[r]).sum():
+            while steps[at] > 0:
+                for move in range(1, len(STEPS)):
+                    back = (at[0] - STEPS[move, 0], at[1] - STEPS[move, 1])
+                    if min(back) >= 0 and max(back) < side and steps[back] == steps[at] - 1:
+                        at, expected = back, move
+                        break
+        assert chosen[r] == expected, (r, chosen[r], expected)
 
 
 @pytest.mark.parametrize("resting", [True, False])

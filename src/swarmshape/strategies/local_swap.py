@@ -25,7 +25,7 @@ from swarmshape.core.perception import Blueprint, Boxes, Perception
 from swarmshape.core.shape import SEED_CELLS
 from swarmshape.strategies import register, routes
 from swarmshape.strategies.skills.relay import best_per_robot
-from swarmshape.strategies.skills.view import SILENCE, paths
+from swarmshape.strategies.skills.view import SILENCE
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
@@ -1129,36 +1129,79 @@ def _plan(
     x = np.where(delta[:, 0] > 0, 1, np.where(delta[:, 0] < 0, 2, 0))
     y = np.where(delta[:, 1] > 0, 3, np.where(delta[:, 1] < 0, 4, 0))
     first = np.where(np.abs(delta[:, 0]) >= np.abs(delta[:, 1]), x, y)
-    planning = going & sense.ready
-    rows = np.flatnonzero(planning)
-    row = np.zeros(len(sense), dtype=np.int64)
-    row[rows] = np.arange(len(rows))  # each going robot's square in `blocked`
-    reach = int(radius)
-    side = 2 * reach + 1
-    blocked = np.ones((len(rows), side, side), dtype=bool)
-    disc = _disc(radius)
-    blocked[:, disc[:, 0] + reach, disc[:, 1] + reach] = False
-    sat = _cells(sense)
-    near = np.flatnonzero(planning[sense.owner] & _within(sat, reach))
-    at = np.take(sat, near, axis=0) + reach  # numpy 2.4 copies sat[near] row by row
-    blocked[row[np.take(sense.owner, near)], at[:, 0], at[:, 1]] = True
-    for direction in range(1, len(STEPS)):
-        (dx, dy) = STEPS[direction] + reach
-        blocked[occupied[rows, direction], dx, dy] = True
-    centre = np.zeros(blocked.shape, dtype=bool)
-    centre[:, reach, reach] = True
-    steps, way = paths(blocked, centre)
-    span = np.arange(-reach, reach + 1)
-    left = np.abs(delta[rows, 0, None, None] - span[None, :, None])
-    left = left + np.abs(delta[rows, 1, None, None] - span[None, None, :])
-    score = np.where(steps >= 0, left * (side * side) + steps, BIG).reshape(len(rows), side * side)
-    best = score.argmin(axis=1)
-    chosen = np.zeros(len(sense), dtype=np.int64)
-    better = score[np.arange(len(rows)), best] // (side * side) < _apart(delta[rows], STEPS[0])
-    chosen[rows] = np.where(
-        better, way.reshape(len(rows), side * side)[np.arange(len(rows)), best], 0
-    )
+    planning = np.flatnonzero(going & sense.ready)
+    beyond = _disc_index(radius) < 0
+    chosen = _first_steps(planning, sense.start, _cells(sense), delta, occupied, beyond)
     return chosen, np.where(going, first, 0)
+
+
+@njit
+def _first_steps(
+    rows: np.ndarray,
+    start: np.ndarray,
+    cells: np.ndarray,
+    delta: np.ndarray,
+    occupied: np.ndarray,
+    beyond: np.ndarray,
+) -> np.ndarray:  # pragma: no cover (compiled)
+    """`_plan`'s paths, robot by robot (`rows`): in its square (`beyond`: the cells out of
+    sensing range), blocked where a neighbour's rounded offset (`cells`, CSR by `start`) or
+    `occupied` says, the fewest moves to each cell breadth first; the cell nearest the goal
+    (`delta` away), then fewest moves, the first in row order; and the first move of a
+    shortest way there, through the first cell in move order a move nearer at each cell.
+    Every robot's square at once, as numpy passes round a compiled breadth-first one, cost
+    the 10,000-robot S 2.8 ms a step; this takes 0.9 ms. The square has a blocked border, so
+    a move needs no test for the square's edges."""
+    side = len(beyond)
+    reach, area, width = side // 2, side * side, side + 2
+    centre = (reach + 1) * width + reach + 1  # cell (x, y) of the square is centre + x * width + y
+    moves = STEPS[:, 0] * width + STEPS[:, 1]
+    bordered = np.ones(width * width, dtype=np.bool_)
+    for x in range(side):
+        for y in range(side):
+            bordered[centre + (x - reach) * width + y - reach] = beyond[x, y]
+    blocked = np.empty(width * width, dtype=np.bool_)
+    steps = np.empty(width * width, dtype=np.int64)
+    queue = np.empty(area, dtype=np.int64)
+    chosen = np.zeros(len(occupied), dtype=np.int64)
+    for r in rows:
+        blocked[:] = bordered
+        for e in range(start[r], start[r + 1]):
+            if abs(cells[e, 0]) <= reach and abs(cells[e, 1]) <= reach:
+                blocked[centre + cells[e, 0] * width + cells[e, 1]] = True
+        for direction in range(1, len(STEPS)):
+            if occupied[r, direction]:
+                blocked[centre + moves[direction]] = True
+        steps[:] = -1
+        steps[centre] = 0  # the robot's own cell, blocked or not
+        queue[0], head, tail = centre, 0, 1
+        while head < tail:
+            cell = queue[head]
+            head += 1
+            for direction in range(1, len(STEPS)):
+                there = cell + moves[direction]
+                if not blocked[there] and steps[there] < 0:
+                    steps[there] = steps[cell] + 1
+                    queue[tail] = there
+                    tail += 1
+        dx, dy = delta[r, 0], delta[r, 1]
+        best, best_score = centre, BIG
+        for x in range(-reach, reach + 1):
+            for y in range(-reach, reach + 1):
+                cell = centre + x * width + y
+                if steps[cell] >= 0:
+                    score = (abs(dx - x) + abs(dy - y)) * area + steps[cell]
+                    if score < best_score:
+                        best, best_score = cell, score
+        if best_score // area >= abs(dx) + abs(dy):
+            continue  # no cell it reaches is nearer its goal than its own
+        cell = best
+        while steps[cell] > 0:  # back through the first cell a move nearer, to its own cell
+            for direction in range(1, len(STEPS)):
+                if steps[cell - moves[direction]] == steps[cell] - 1:
+                    cell, chosen[r] = cell - moves[direction], direction
+                    break
+    return chosen
 
 
 def _go_round(

@@ -126,34 +126,20 @@ def _look(
         entry[k] = who[robots[k], x, y] if seen[k] else -1
 
 
-def paths(blocked: np.ndarray, sources: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def distances(blocked: np.ndarray, sources: np.ndarray) -> np.ndarray:
     """Breadth-first through each robot's square ``(k, side, side)`` from its `sources` cells
     round its `blocked` ones (a source may be blocked itself): the fewest moves to each cell
-    (-1: out of reach) and the first move of a shortest way there, the way of the cell it is
-    entered from by the first move, in move order, that enters it from one a move nearer (0
-    at a source). Compiled: scipy's dilation, a pass of the whole stack a level, cost
+    (-1: out of reach). Compiled: scipy's dilation, a pass of the whole stack a level, cost
     `mean-shift` a twentieth of its step."""
     steps = np.where(sources, 0, -1)
-    way = np.zeros(blocked.shape, dtype=np.int64)
-    _spread(np.ascontiguousarray(blocked), steps, way)
-    return steps, way
-
-
-def distances(blocked: np.ndarray, sources: np.ndarray) -> np.ndarray:
-    """`paths`' fewest moves alone: working out the ways as well took as long again."""
-    steps = np.where(sources, 0, -1)
-    _spread(np.ascontiguousarray(blocked), steps, np.zeros((0, 0, 0), dtype=np.int64))
+    _spread(np.ascontiguousarray(blocked), steps)
     return steps
 
 
 @njit
-def _spread(
-    blocked: np.ndarray, steps: np.ndarray, way: np.ndarray
-) -> None:  # pragma: no cover (compiled)
-    """`paths`, robot by robot: the distances by a queue, then the ways in the queue's order
-    (each cell's after those of the cells a move nearer), unless `way` is empty (`distances`).
-    Scanning the whole square once a level cost a robot side x side x 4 cells a level; this
-    visits each cell once."""
+def _spread(blocked: np.ndarray, steps: np.ndarray) -> None:  # pragma: no cover (compiled)
+    """`distances`, robot by robot, by a queue. Scanning the whole square once a level cost a
+    robot side x side x 4 cells a level; this visits each cell once."""
     side = blocked.shape[1]
     queue = np.empty(side * side, dtype=np.int64)
     for r in range(blocked.shape[0]):
@@ -175,14 +161,3 @@ def _spread(
                     steps[r, tx, ty] = steps[r, x, y] + 1
                     queue[tail] = tx * side + ty
                     tail += 1
-        if not len(way):
-            continue
-        for k in range(tail):
-            x, y = queue[k] // side, queue[k] % side
-            if steps[r, x, y] == 0:
-                continue
-            for direction in range(1, 5):
-                fx, fy = x - STEPS[direction, 0], y - STEPS[direction, 1]
-                if 0 <= fx < side and 0 <= fy < side and steps[r, fx, fy] == steps[r, x, y] - 1:
-                    way[r, x, y] = direction if steps[r, x, y] == 1 else way[r, fx, fy]
-                    break
