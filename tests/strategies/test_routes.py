@@ -56,6 +56,24 @@ def test_a_route_goes_round_the_shape_and_ends_on_its_target():
     assert len(path) - 1 == 4 + 6 + 5 + 2 + 1
 
 
+def test_a_robot_beside_the_box_steps_in_and_one_farther_out_costs_no_field():
+    """A robot one move off the box round the shape steps onto it; one farther out has no
+    way (it walks straight in), and no field is worked out for it: at 10,000 robots nine in
+    ten of local-swap's fields were for such robots, and went unused."""
+    shape = blueprint_of(U)
+    low, _ = routes._box(shape, 0)
+    beside, beyond = (low[0] - 1, 2), (low[0] - 2, 2)
+    pool = routes._fields(shape, 0)
+    cells, found = routes.waypoints(
+        shape, np.zeros(2, int), np.array([beside, beyond]), np.array([(1, 1), (5, 1)]), 3
+    )
+    assert found.tolist() == [True, False]
+    assert cells[0, 0] >= low[0] and tuple(cells[1]) == (5, 1)
+    assert (1, 1) in pool.slot and (5, 1) not in pool.slot
+    walked, _ = routes.ways(shape, np.zeros(1, int), np.array([beyond]), np.array([(5, 1)]))
+    assert np.isinf(walked[0]) and (5, 1) not in pool.slot
+
+
 def test_a_route_into_a_walled_in_cell_crosses_the_fewest_shape_cells():
     shape = blueprint_of("#####\n#####\n#####\n#####\n#####")
     inside = {tuple(c) for c in shape.cells[0].tolist()}
