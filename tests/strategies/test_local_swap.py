@@ -79,11 +79,13 @@ def _wants_at_rest(
     asked_before: np.ndarray,
     numbers: np.ndarray | None = None,
     preferred: np.ndarray | None = None,
+    ready: np.ndarray | None = None,
 ) -> np.ndarray:
-    """The partners (by number) that robots at rest on `cells`, all in touch, holding `goals`
-    and blocked (or with the way round their planner `preferred`), want; each asked last step
-    for the one numbered `asked_before`."""
+    """The partners (by number) that robots at rest on `cells` (or under way where `ready` is
+    False), all in touch, holding `goals` and blocked (or with the way round their planner
+    `preferred`), want; each asked last step for the one numbered `asked_before`."""
     n = len(cells)
+    ready = np.ones(n, dtype=bool) if ready is None else ready
     numbers = np.arange(n) if numbers is None else numbers
     program = local_swap.LocalSwap()
     memory = Memory(program.memory, n)
@@ -99,7 +101,7 @@ def _wants_at_rest(
     message[:, local_swap.WANTS] = asked_before[other]
     yes = np.ones(len(owner), dtype=bool)
     sense = Perception(
-        number=numbers, group=np.zeros(n, dtype=np.int64), ready=np.ones(n, dtype=bool),
+        number=numbers, group=np.zeros(n, dtype=np.int64), ready=ready,
         heading=np.zeros(n, dtype=np.int64), cruising=np.zeros(n, dtype=bool), progress=np.zeros(n),
         moved=np.zeros((n, 2), dtype=np.int64), start=np.arange(0, n * (n - 1) + 1, n - 1),
         owner=owner, offset=(cells[other] - cells[owner]).astype(float), seed=~yes, kin=yes,
@@ -180,6 +182,27 @@ def test_a_robot_on_its_way_asks_the_robot_resting_on_its_goal_in_its_way(restin
     goals = np.array([(0, 5), (0, 1) if resting else (3, 3)])
     wants = _wants_at_rest(cells, goals, np.array([-1, -1]), preferred=np.array([1, 0]))
     assert wants[0] == (1 if resting else -1)
+
+
+def test_a_robot_under_way_agrees_a_trade_that_shortens_the_way_and_no_other():
+    """Robots used to choose partners only at rest, and one that asked a robot under way held
+    still while it passed by. Under way a robot agrees a trade that shortens their summed way
+    (it goes on while it does); one that gains nothing (a swap with a robot resting on its
+    goal in its way) is for a robot at rest, blocked there."""
+    first_under_way = np.array([False, True])  # `ready`: robot 0 under way, robot 1 at rest
+    cells = np.array([(0, 0), (0, 1)])
+    shorter = _wants_at_rest(
+        cells, np.array([(0, 5), (0, -4)]), np.array([-1, -1]), ready=first_under_way
+    )
+    assert shorter.tolist() == [1, 0]
+    resting_in_its_way = np.array([(0, 5), (0, 1)])
+    preferred = np.array([1, 0])
+    at_rest = _wants_at_rest(cells, resting_in_its_way, np.array([-1, -1]), preferred=preferred)
+    assert at_rest[0] == 1
+    moving = _wants_at_rest(
+        cells, resting_in_its_way, np.array([-1, -1]), preferred=preferred, ready=first_under_way
+    )
+    assert moving[0] == -1
 
 
 def test_robots_without_bearings_that_hear_a_hop_count_wait_for_them():
