@@ -146,7 +146,8 @@ def test_a_robot_plans_its_first_step_on_a_shortest_way_to_the_free_cell_nearest
         heard=np.ones(len(owner), dtype=bool), message=nobody, seed_frame=nobody,
         blueprint=Blueprint.of([np.zeros((1, 2), dtype=np.int64)]), step=1, radius=radius,
     )  # fmt: skip
-    chosen, _ = local_swap._plan(sense, delta, occupied, going, radius)
+    everyone = np.ones(len(owner), dtype=bool)
+    chosen, _ = local_swap._plan(sense, delta, occupied, going, radius, everyone)
     span = np.arange(-reach, reach + 1)
     x, y = np.meshgrid(span, span, indexing="ij")
     for r in range(n):
@@ -170,6 +171,42 @@ def test_a_robot_plans_its_first_step_on_a_shortest_way_to_the_free_cell_nearest
                         at, expected = back, move
                         break
         assert chosen[r] == expected, (r, chosen[r], expected)
+
+
+@pytest.mark.parametrize(
+    ("offset", "stays", "follows"),
+    [
+        ((1.3, 0.0), 0, True),  # leaving its cell straight away from the robot
+        ((1.0, 0.0), 0, False),  # asked a move, not yet begun it
+        ((1.3, 0.0), 1, False),  # says it stays
+        ((1.0, 0.3), 0, False),  # leaving sideways
+    ],
+)
+def test_a_robot_follows_a_neighbour_leaving_the_cell_on_its_way(offset, stays, follows):
+    """A robot at rest, its goal three cells along a corridor of one, plans the step into the
+    cell ahead only while the robot there is leaving it straight away from it: the swarm
+    queues it behind that robot (`Swarm.followable`). A line of robots a cell short of their
+    goals moved one at a time before, each waiting for the cell ahead to empty."""
+    walls = [(x, y) for x in range(-1, 5) for y in (-1, 1)]  # a corridor along x
+    cells = np.array([offset, *walls], dtype=float)
+    message = np.zeros((len(cells), local_swap.LocalSwap.message_size), dtype=np.int64)
+    message[0, local_swap.STAYS] = stays
+    sense = Perception(
+        number=np.arange(1), group=np.zeros(1, dtype=np.int64), ready=np.ones(1, dtype=bool),
+        heading=np.zeros(1, dtype=np.int64), cruising=np.zeros(1, dtype=bool),
+        progress=np.zeros(1), moved=np.zeros((1, 2), dtype=np.int64),
+        start=np.array([0, len(cells)]), owner=np.zeros(len(cells), dtype=np.int64),
+        offset=cells, seed=np.arange(len(cells)) > 0, kin=np.ones(len(cells), dtype=bool),
+        heard=np.ones(len(cells), dtype=bool), message=message,
+        seed_frame=np.zeros((len(cells), 2), dtype=np.int64),
+        blueprint=Blueprint.of([np.zeros((1, 2), dtype=np.int64)]), step=1, radius=3.0,
+    )  # fmt: skip
+    staying = ~local_swap._leaving_ahead(sense)
+    occupied = local_swap._occupied(sense, staying)
+    chosen, _ = local_swap._plan(
+        sense, np.array([(3, 0)]), occupied, np.ones(1, dtype=bool), 3.0, staying
+    )
+    assert chosen[0] == (1 if follows else 0)
 
 
 @pytest.mark.parametrize("resting", [True, False])
