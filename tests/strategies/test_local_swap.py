@@ -174,15 +174,15 @@ def test_a_robot_plans_its_first_step_on_a_shortest_way_to_the_free_cell_nearest
 
 
 @pytest.mark.parametrize(
-    ("offset", "stays", "follows"),
+    ("offset", "moving", "follows"),
     [
-        ((1.3, 0.0), 0, True),  # leaving its cell straight away from the robot
-        ((1.0, 0.0), 0, False),  # asked a move, not yet begun it
-        ((1.3, 0.0), 1, False),  # says it stays
-        ((1.0, 0.3), 0, False),  # leaving sideways
+        ((1.3, 0.0), 1, True),  # leaving its cell straight away from the robot
+        ((1.0, 0.0), 1, False),  # under way, not yet past its cell's centre
+        ((1.3, 0.0), 0, False),  # at rest (a noisy distance)
+        ((1.0, 0.3), 1, False),  # leaving sideways
     ],
 )
-def test_a_robot_follows_a_neighbour_leaving_the_cell_on_its_way(offset, stays, follows):
+def test_a_robot_follows_a_neighbour_leaving_the_cell_on_its_way(offset, moving, follows):
     """A robot at rest, its goal three cells along a corridor of one, plans the step into the
     cell ahead only while the robot there is leaving it straight away from it: the swarm
     queues it behind that robot (`Swarm.followable`). A line of robots a cell short of their
@@ -190,7 +190,7 @@ def test_a_robot_follows_a_neighbour_leaving_the_cell_on_its_way(offset, stays, 
     walls = [(x, y) for x in range(-1, 5) for y in (-1, 1)]  # a corridor along x
     cells = np.array([offset, *walls], dtype=float)
     message = np.zeros((len(cells), local_swap.LocalSwap.message_size), dtype=np.int64)
-    message[0, local_swap.STAYS] = stays
+    message[0, local_swap.MOVING] = moving
     sense = Perception(
         number=np.arange(1), group=np.zeros(1, dtype=np.int64), ready=np.ones(1, dtype=bool),
         heading=np.zeros(1, dtype=np.int64), cruising=np.zeros(1, dtype=bool),

@@ -29,8 +29,8 @@ from swarmshape.strategies.skills.view import SILENCE
 
 (
     LOCALISED, X, Y, HAS, GX, GY, WANTS, NUMBER, STAYS, HOPS, OX, OY, OPEN_HOPS, TWICE, TX, TY,
-    SX, SY, SEEKER_HOPS, LEAVING, KEPT, OPEN_AGE, SPARE_HOPS, SPARE_AGE,
-) = range(24)  # fmt: skip
+    SX, SY, SEEKER_HOPS, LEAVING, KEPT, OPEN_AGE, SPARE_HOPS, SPARE_AGE, MOVING,
+) = range(25)  # fmt: skip
 """What a robot broadcasts, in order. STAYS: it was at rest and asked for no move, so next step
 it is still on the cell (X, Y) it names, and a neighbour may take its bearings from it. HAS, GX,
 GY: whether it holds a goal, and that goal's frame cell. HOPS: hops to the nearest localised
@@ -41,7 +41,8 @@ TX, TY: a goal it hears held twice, by a robot at rest on it and one still on it
 hops to it (see `_relay_seekers`). LEAVING: it pushes its way out of a pocket of the shape
 (see `_leaving`). KEPT: it rests on a cell a reshape kept (see `_reshaped`). OPEN_AGE: steps
 since the open cell (OX, OY) was last seen open. SPARE_HOPS, SPARE_AGE: hops to a robot without
-a goal, and steps since it had none (see `_relay_spares`). Ages, not steps of a clock: robots
+a goal, and steps since it had none (see `_relay_spares`). MOVING: it was under way, between
+two cells (see `_leaving_ahead`). Ages, not steps of a clock: robots
 need not agree on the time, and the numbers stay small."""
 
 FAR = 1000
@@ -131,7 +132,7 @@ before it calls open cells to it (see `_cut_off`)."""
 class LocalSwap(Program):
     name = "local-swap"
     description = "goals by robot number, traded between neighbours (Wang & Rubenstein 2020)"
-    message_size = 24
+    message_size = 25
     memory: ClassVar[dict[str, Slot]] = {
         "localised": Slot(bool, False),
         "frame": Slot(np.int64, 0, 2),
@@ -280,6 +281,7 @@ class LocalSwap(Program):
                 np.minimum(sense.step - memory.heard_at, FAR),
                 spares,
                 np.minimum(sense.step - memory.spare_at, FAR),
+                ~sense.ready,
             ]
         ).astype(np.int64)
         return moves, messages
@@ -1119,13 +1121,16 @@ def _note_walls(sense: Perception, memory: Memory, occupied: np.ndarray) -> None
 
 def _leaving_ahead(sense: Perception) -> np.ndarray:
     """Entries of a neighbour that is leaving the cell beside the robot, straight away from it:
-    under way (it said it does not stay) and past that cell's centre, within half a cell of
-    the line through both. The robot may follow it in: the swarm queues a claim on a cell
-    whose robot leaves it the same way (`Swarm.followable`), and refuses any other."""
+    under way (by its message) and past that cell's centre, within half a cell of the line
+    through both. The robot may follow it in: the swarm queues a claim on a cell whose robot
+    leaves it the same way (`Swarm.followable`), and refuses any other. A robot at rest whose
+    asks were refused says it does not stay too, and with noisy distances one in two looked
+    past its cell's centre: the robot behind asked for its cell, refused, step after step, and
+    never went round (a fuzz case of 88 cells stopped at 84 %)."""
     cells = _cells(sense)
     along = (sense.offset * cells).sum(axis=1)  # how far along the step to that cell
     across = np.abs(sense.offset - cells * along[:, None]).sum(axis=1)
-    under_way = sense.heard & ~sense.seed & (sense.message[:, STAYS] == 0)
+    under_way = sense.heard & ~sense.seed & (sense.message[:, MOVING] == 1)
     return under_way & (_apart(cells, STEPS[0]) == 1) & (along > 1.0) & (across < 0.5)
 
 
