@@ -23,6 +23,7 @@ from swarmshape.errors import InputError
 from swarmshape.io.checkpoint import PICKLE_HEADER, load_state
 from swarmshape.runs import build, resume, run, save
 from swarmshape.strategies import available
+from swarmshape.strategies.local_swap import LocalSwap
 from tests.conftest import SHAPES, each_choice
 from tests.fuzzing import changed_state, state_bytes, state_members
 
@@ -69,18 +70,18 @@ def test_a_run_saved_before_its_program_kept_a_memory_slot_resumes_with_it_as_ne
 
 
 def test_a_run_saved_before_its_program_broadcast_a_field_resumes_with_it_as_0(tmp_path):
-    """`local-swap` appended the message fields OPEN_AGE, SPARE_HOPS and SPARE_AGE (and four
-    memory slots) after runs were saved: a file without them resumes, the fields as 0 and the
-    slots as new, and the run forms (not step for step as it would have: for a step, every
-    robot's news reads as just heard, and every robot as one without a goal). A broadcast
-    wider than the program's is damaged."""
+    """`local-swap` appended the message fields OPEN_AGE, SPARE_HOPS, SPARE_AGE and MOVING
+    (and four memory slots) after runs were saved: a file without them resumes, the fields as
+    0 and the slots as new, and the run forms (not step for step as it would have: for a step,
+    every robot's news reads as just heard, every robot as one without a goal, and none as
+    under way). A broadcast wider than the program's is damaged."""
     config = config_for("local-swap")
     save(run(build(config), max_steps=23), tmp_path / "s.state", config)
     manifest, arrays = state_members(tmp_path / "s.state")
     for slot in ("heard_at", "spare_hops", "spare_at", "spare_until"):
         del arrays[f"swarm.driver.memory.{slot}"]
     broadcast = arrays["swarm.driver.broadcast"]
-    arrays["swarm.driver.broadcast"] = broadcast[:, :-3].copy()
+    arrays["swarm.driver.broadcast"] = broadcast[:, :-4].copy()
     (tmp_path / "old.state").write_bytes(state_bytes(manifest, arrays))
     _, resumed = resume(tmp_path / "old.state")
     formed = run(resumed, max_steps=50_000)
@@ -88,7 +89,8 @@ def test_a_run_saved_before_its_program_broadcast_a_field_resumes_with_it_as_0(t
     assert formed.overlap_total == 0
     arrays["swarm.driver.broadcast"] = np.pad(broadcast, ((0, 0), (0, 1)))
     (tmp_path / "wide.state").write_bytes(state_bytes(manifest, arrays))
-    with pytest.raises(InputError, match="broadcast has 25 fields, expected 24"):
+    width = LocalSwap.message_size
+    with pytest.raises(InputError, match=f"broadcast has {width + 1} fields, expected {width}"):
         resume(tmp_path / "wide.state")
 
 
