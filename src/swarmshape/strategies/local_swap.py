@@ -1183,10 +1183,9 @@ def _first_steps(
     `start`) or `occupied` says, the fewest moves to each cell breadth first; the cell
     nearest the goal (`delta` away), then fewest moves, the first in row order; and the first
     move of a shortest way there, through the first cell in move order a move nearer at each
-    cell.
-    Every robot's square at once, as numpy passes round a compiled breadth-first one, cost
-    the 10,000-robot S 2.8 ms a step; this takes 0.9 ms. The square has a blocked border, so
-    a move needs no test for the square's edges."""
+    cell. Every robot's square at once, as numpy passes round a compiled breadth-first one,
+    cost the 10,000-robot S 2.8 ms a step; this takes 0.9 ms. The square has a blocked
+    border, so a move needs no test for the square's edges."""
     side = len(beyond)
     reach, area, width = side // 2, side * side, side + 2
     centre = (reach + 1) * width + reach + 1  # cell (x, y) of the square is centre + x * width + y
