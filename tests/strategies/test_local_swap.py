@@ -155,7 +155,7 @@ def test_a_robot_plans_its_first_step_on_a_shortest_way_to_the_free_cell_nearest
         sat = np.rint(offset[owner == r]).astype(int)
         sat = sat[(np.abs(sat) <= reach).all(axis=1)]
         blocked[sat[:, 0] + reach, sat[:, 1] + reach] = True
-        for move in np.flatnonzero(occupied[r])[np.flatnonzero(occupied[r]) > 0]:
+        for move in np.flatnonzero(occupied[r, 1:]) + 1:
             blocked[STEPS[move, 0] + reach, STEPS[move, 1] + reach] = True
         sources = (x == 0) & (y == 0)
         steps = dilated(blocked, sources)
@@ -179,7 +179,7 @@ def test_a_robot_plans_its_first_step_on_a_shortest_way_to_the_free_cell_nearest
         ((1.3, 0.0), 1, True),  # leaving its cell straight away from the robot
         ((1.0, 0.0), 1, False),  # under way, not yet past its cell's centre
         ((1.3, 0.0), 0, False),  # at rest (a noisy distance)
-        ((1.0, 0.3), 1, False),  # leaving sideways
+        ((1.0, 0.3), 1, False),  # moving across the robot's way
     ],
 )
 def test_a_robot_follows_a_neighbour_leaving_the_cell_on_its_way(offset, moving, follows):

@@ -1121,17 +1121,17 @@ def _note_walls(sense: Perception, memory: Memory, occupied: np.ndarray) -> None
 
 def _leaving_ahead(sense: Perception) -> np.ndarray:
     """Entries of a neighbour that is leaving the cell beside the robot, straight away from it:
-    under way (by its message) and past that cell's centre, within half a cell of the line
-    through both. The robot may follow it in: the swarm queues a claim on a cell whose robot
-    leaves it the same way (`Swarm.followable`), and refuses any other. A robot at rest whose
-    asks were refused says it does not stay too, and with noisy distances one in two looked
-    past its cell's centre: the robot behind asked for its cell, refused, step after step, and
-    never went round (a fuzz case of 88 cells stopped at 84 %)."""
+    under way (by its message), its offset rounding to that cell's and past the cell's centre
+    (one moving across the robot's way stays level with it). The robot may follow it in: the
+    swarm queues a claim on a cell whose robot leaves it the same way (`Swarm.followable`),
+    and refuses any other. A robot at rest whose asks were refused says it does not stay too,
+    and with noisy distances one in two looked past its cell's centre: the robot behind asked
+    for its cell, refused, step after step, and never went round (a fuzz case of 88 cells
+    stopped at 84 %)."""
     cells = _cells(sense)
     along = (sense.offset * cells).sum(axis=1)  # how far along the step to that cell
-    across = np.abs(sense.offset - cells * along[:, None]).sum(axis=1)
     under_way = sense.heard & ~sense.seed & (sense.message[:, MOVING] == 1)
-    return under_way & (_apart(cells, STEPS[0]) == 1) & (along > 1.0) & (across < 0.5)
+    return under_way & (_apart(cells, STEPS[0]) == 1) & (along > 1.0)
 
 
 def _plan(
