@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy
 
-from swarmshape.core.audit import new_scratch, overlaps
+from swarmshape.core.audit import Audit, new_scratch
 from swarmshape.core.compiled import njit
 from swarmshape.core.faults import Faults
 from swarmshape.core.guard import PluginCode
@@ -362,6 +362,7 @@ class Swarm:
         self.target_at[world.targets[:, 0], world.targets[:, 1]] = np.arange(len(world.targets))
         """The index of the target at each cell, -1 where there is none."""
         self.dead = self._find_dead()
+        self._auditor = Audit(world.size)  # the seeds may have moved
         self.driver.index_world()
 
     # --- the robots' states: drivers say what happened, only the swarm writes it ---------------
@@ -524,8 +525,8 @@ class Swarm:
         """Count overlapping pairs of squares, seeds included, from the positions alone."""
         world = self.world
         present = self.state != LOST
-        i, j = overlaps(
-            self.cell, self.direction, self.offset, world.seeds, world.size, present, self._scratch
+        i, j = self._auditor.pairs(
+            self.cell, self.direction, self.offset, world.seeds, present, self._scratch
         )
         if len(i) == 0:
             return
