@@ -194,6 +194,17 @@ def test_a_world_and_its_shapes_are_read_only():
     assert group.shape.grid[0, 1]
 
 
+def test_each_groups_targets_lie_together_where_targets_of_says():
+    """The swarm checks a group's targets by the span `targets_of` gives, not by a mask over
+    every target: each group's targets, and only they, lie there."""
+    shapes = [Shape(grid_from("###\n#.#")), Shape(grid_from("#")), Shape(grid_from("##\n##"))]
+    world = build_world([GroupSpec(f"g{k}", shape, (1, 2, 3)) for k, shape in enumerate(shapes)])
+    for group in range(3):
+        span = np.arange(len(world.targets))[world.targets_of(group)]
+        assert span.tolist() == np.flatnonzero(world.target_group == group).tolist()
+        assert len(span) == len(world.groups[group].targets) > 0
+
+
 def test_fitting_a_wide_shape_to_few_robots_resamples_it_a_few_times_not_once_per_side(
     monkeypatch,
 ):

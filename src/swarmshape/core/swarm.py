@@ -424,16 +424,18 @@ class Swarm:
         its robots can reach while no stalled robot coasts and no failure rate may open one
         (re-forming leaves that only when every robot that can move stands on another group's
         shape, where a live change to that shape may have put it)."""
-        able = ((self.state != LOST) & (self.state != STALLED)) | (self.ahead > 0)
-        walls_set = self.faults.rate == 0 and self._walls_still()
-        groups = range(len(self.world.groups))
-        done = [
-            self._whole(g)
-            or not able[self.group == g].any()
-            or (walls_set and self.dead[self.world.target_group == g].all())
-            for g in groups
-        ]
-        return all(done) and not all(self._whole(g) for g in groups)
+        whole = [self._whole(g) for g in range(len(self.world.groups))]
+        # the cheap tests first: this runs every step, and under way most robots can move
+        return not all(whole) and all(
+            whole[g]
+            or not _any_able(self.state, self.ahead, self.group, g)
+            or (
+                self.dead[self.world.targets_of(g)].all()
+                and self.faults.rate == 0
+                and self._walls_still()
+            )
+            for g in range(len(whole))
+        )
 
     def movable(self, group: int) -> int:
         """How many robots of `group` can still move (neither removed nor stalled): what a new
@@ -730,9 +732,9 @@ class Swarm:
         formed. A shape that keeps its size when faults leave it short of robots
         (`Params.on_loss`) is formed as far as it can be once every robot of it that can still
         move rests on one of its targets: the cells left open wait for nobody."""
-        mine = self.world.target_group == group
+        mine = self.world.targets_of(group)
         filled, dead = self.filled[mine], self.dead[mine]
-        if (filled | dead).all():
+        if _first_neither(filled, dead) < 0:
             if dead.any() and not self._walls_still():
                 return False  # a stalled robot still coasting may yet open a cell it cuts off
             return bool(filled.any()) or not dead.any()
@@ -779,6 +781,29 @@ class Swarm:
     def _mobile(self) -> np.ndarray:
         """Per robot, whether it can still move (neither lost nor stalled)."""
         return (self.state != LOST) & (self.state != STALLED)
+
+
+@njit
+def _first_neither(a: np.ndarray, b: np.ndarray) -> int:  # pragma: no cover (compiled)
+    """The first place where neither `a` nor `b` holds, or -1: ``(a | b).all()`` without a
+    pass over every target each time (a run under way has an open target early on). Checked
+    four times a step; at 1,000,000 robots the masks took 1 ms each."""
+    for k in range(len(a)):
+        if not (a[k] or b[k]):
+            return k
+    return -1
+
+
+@njit
+def _any_able(
+    state: np.ndarray, ahead: np.ndarray, group: np.ndarray, g: int
+) -> bool:  # pragma: no cover (compiled)
+    """Whether a robot of group `g` can still move (neither removed nor stalled) or is still
+    under way, stopping at the first: in a run under way, the first robot of the group."""
+    for r in range(len(state)):
+        if group[r] == g and ((state[r] != LOST and state[r] != STALLED) or ahead[r] > 0):
+            return True
+    return False
 
 
 @njit

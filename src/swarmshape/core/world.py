@@ -122,6 +122,11 @@ class World:
     def agents(self) -> int:
         return sum(g.agents for g in self.groups)
 
+    def targets_of(self, group: int) -> slice:
+        """Where `group`'s targets lie in `targets`: together, the groups in order."""
+        ends = np.searchsorted(self.target_group, [group, group + 1])
+        return slice(int(ends[0]), int(ends[1]))
+
     def reshaped(self, group: int, shape: Shape, pose: Pose) -> World:
         """The same arena with one group's shape (and seed pose) replaced; checked as new."""
         old = self.groups[group]
