@@ -60,13 +60,13 @@ def test_goal_less_robots_find_their_way_round_to_open_cells_with_messages_lost(
     )
 )
 def test_robots_at_rest_that_want_trades_always_agree_one(robots):
-    """A handful of robots at rest, all in touch: if any two would shorten their summed way by
-    trading goals, some two ask each other, whatever they asked for last step. Five robots
-    twenty cells from a 1,018-robot S, each preferring the one that had asked for it, passed
-    the asks round a ring for 17,000 steps without one trade."""
+    """A handful of robots at rest, all in touch: if any two would shorten their summed squared
+    way by trading goals, some two ask each other, whatever they asked for last step. Five
+    robots twenty cells from a 1,018-robot S, each preferring the one that had asked for it,
+    passed the asks round a ring for 17,000 steps without one trade."""
     cells, goals, asked_before = (np.array(part) for part in robots)
     wants = _wants_at_rest(cells, goals, asked_before)
-    apart = np.abs(cells[:, None] - goals[None]).sum(axis=2)  # robot by goal
+    apart = ((cells[:, None] - goals[None]) ** 2).sum(axis=2)  # robot by goal
     gain = apart.diagonal()[:, None] + apart.diagonal()[None] - apart - apart.T
     if (gain > 0).any():
         asking = np.flatnonzero(wants >= 0)
@@ -214,32 +214,31 @@ def test_a_robot_on_its_way_asks_the_robot_resting_on_its_goal_in_its_way(restin
     """Wang and Rubenstein's swap when blocked, even with a way round: the 1,018-robot S (seed
     2) waited 400 steps for a robot walking round the letter to a goal across its formed
     part, while it passed robots resting on their goals that it could have traded with. A
-    robot in the way that is not on its own goal is walked round, as before."""
+    robot in the way that is not on its own goal, where a trade gains nothing, is walked
+    round, as before."""
     cells = np.array([(0, 0), (0, 1)])
-    goals = np.array([(0, 5), (0, 1) if resting else (3, 3)])
+    goals = np.array([(0, 5), (0, 1) if resting else (3, 5)])  # 25 + 25 = 34 + 16
     wants = _wants_at_rest(cells, goals, np.array([-1, -1]), preferred=np.array([1, 0]))
     assert wants[0] == (1 if resting else -1)
 
 
 def test_a_robot_under_way_agrees_a_trade_that_shortens_the_way_and_no_other():
     """Robots used to choose partners only at rest, and one that asked a robot under way held
-    still while it passed by. Under way a robot agrees a trade that shortens their summed way
-    (it goes on while it does); one that gains nothing (a swap with a robot resting on its
-    goal in its way) is for a robot at rest, blocked there."""
+    still while it passed by. Under way a robot agrees a trade that shortens their summed
+    squared way (it goes on while it does): a swap with a robot resting on its goal in its way
+    too, which sends the goal on a cell nearer. One that gains nothing is for a robot at rest,
+    blocked there."""
     first_under_way = np.array([False, True])  # `ready`: robot 0 under way, robot 1 at rest
     cells = np.array([(0, 0), (0, 1)])
-    shorter = _wants_at_rest(
-        cells, np.array([(0, 5), (0, -4)]), np.array([-1, -1]), ready=first_under_way
-    )
+    no_asks, blocked = np.array([-1, -1]), np.array([0, 0])
+    shorter = _wants_at_rest(cells, np.array([(0, 5), (0, -4)]), no_asks, ready=first_under_way)
     assert shorter.tolist() == [1, 0]
     resting_in_its_way = np.array([(0, 5), (0, 1)])
-    preferred = np.array([1, 0])
-    at_rest = _wants_at_rest(cells, resting_in_its_way, np.array([-1, -1]), preferred=preferred)
-    assert at_rest[0] == 1
-    moving = _wants_at_rest(
-        cells, resting_in_its_way, np.array([-1, -1]), preferred=preferred, ready=first_under_way
-    )
-    assert moving[0] == -1
+    for ready in (None, first_under_way):
+        assert _wants_at_rest(cells, resting_in_its_way, no_asks, ready=ready)[0] == 1
+    even = np.array([(0, 3), (1, 3)])  # 9 + 5 = 4 + 10: the trade gains nothing
+    assert _wants_at_rest(cells, even, no_asks, preferred=blocked)[0] == 1
+    assert _wants_at_rest(cells, even, no_asks, preferred=blocked, ready=first_under_way)[0] == -1
 
 
 def test_robots_without_bearings_that_hear_a_hop_count_wait_for_them():
