@@ -1535,7 +1535,7 @@ def _roam(
     rows = np.flatnonzero(roaming & sense.ready)
     way, crossing, sweep = memory.roam[rows], memory.crossing[rows], memory.sweep[rows]
     shift = memory.shift[rows]
-    walls = occupied[rows] & ~_occupied(sense, roaming[sense.owner])[rows]
+    walls = occupied[rows] & ~_crowded(sense, roaming)[rows]
     each = np.arange(len(rows))
     fresh = crossing == 0
     crossing[fresh] = np.where(way[fresh] > 0, way[fresh], rng.integers(1, 5, fresh.sum()))
@@ -1559,6 +1559,20 @@ def _roam(
         occupied[rows[blocked]], rng
     )
     return moves
+
+
+def _crowded(sense: Perception, robots: np.ndarray) -> np.ndarray:
+    """``(n, 5)``: for `robots`, whether a neighbour is within a cell and a half of the cell one
+    step in each direction. A move that failed where none is met the arena's edge; one that
+    failed beside a robot under way lost the cell to it. Counting only neighbours on the cell
+    itself, a robot sweeping for the others took a robot moving in for the edge, and turned
+    back four cells from them."""
+    entries = np.flatnonzero(robots[sense.owner])
+    crowded = np.zeros((len(sense), len(STEPS)), dtype=bool)
+    for way in range(1, len(STEPS)):
+        close = entries[_within(sense.offset[entries] - STEPS[way], 1.5)]
+        crowded[sense.owner[close], way] = True
+    return crowded
 
 
 @functools.lru_cache(maxsize=4)
