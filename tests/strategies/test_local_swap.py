@@ -3,6 +3,8 @@ cells that lost messages left open."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import example, given, settings
@@ -97,6 +99,7 @@ def _wants_at_rest(
     message[:, local_swap.LOCALISED] = message[:, local_swap.HAS] = message[:, local_swap.STAYS] = 1
     message[:, [local_swap.X, local_swap.Y]] = cells[other]
     message[:, [local_swap.GX, local_swap.GY]] = goals[other]
+    message[:, [local_swap.OX, local_swap.OY]] = UNFINISHED  # both ends know of an open cell
     message[:, local_swap.NUMBER] = numbers[other]
     message[:, local_swap.WANTS] = asked_before[other]
     yes = np.ones(len(owner), dtype=bool)
@@ -110,10 +113,17 @@ def _wants_at_rest(
     )  # fmt: skip
     nobody = np.zeros(0, dtype=np.int64)
     preferred = np.zeros(n, dtype=np.int64) if preferred is None else preferred
+    news = np.broadcast_to(UNFINISHED, (n, 2))
     return local_swap._choose_partner(
-        sense, memory, preferred, goals, np.zeros(n, dtype=bool),
-        goals, np.full(n, local_swap.FAR), nobody, nobody,
+        sense, memory, preferred, goals, np.zeros(n, dtype=bool), news, np.zeros(n, int),
+        nobody, nobody,
     )  # fmt: skip
+
+
+UNFINISHED = np.array([99, 99])
+"""An open cell far off that every robot of `_wants_at_rest` has news of, at 0 hops (so each
+knows the shape unfinished, as `_partners` asks before a robot resting on its goal trades it
+for one out of its sight; each end of a pair must read the same)."""
 
 
 @settings(max_examples=60, deadline=None)  # the first example compiles the kernel
@@ -239,6 +249,10 @@ def test_a_robot_under_way_agrees_a_trade_that_shortens_the_way_and_no_other():
     even = np.array([(0, 3), (1, 3)])  # 9 + 5 = 4 + 10: the trade gains nothing
     assert _wants_at_rest(cells, even, no_asks, preferred=blocked)[0] == 1
     assert _wants_at_rest(cells, even, no_asks, preferred=blocked, ready=first_under_way)[0] == -1
+    beside = np.array([(0, 0), (1, 0)])  # robot 1 rests on its goal, in robot 0's way
+    resting_even = np.array([(1, 5), (1, 0)])  # 26 + 0 = 1 + 25
+    assert _wants_at_rest(beside, resting_even, no_asks)[0] == 1
+    assert _wants_at_rest(beside, resting_even, no_asks, ready=first_under_way)[0] == -1
 
 
 def test_robots_without_bearings_that_hear_a_hop_count_wait_for_them():
@@ -270,6 +284,25 @@ def test_robots_cut_off_from_the_rest_set_out_to_look_for_them():
     swarm = run(swarm, max_steps=5000)
     assert swarm.complete
     assert swarm.overlap_total == 0
+
+
+def test_a_robot_alone_without_bearings_sweeps_the_arena_in_strips_until_it_finds_them():
+    """A robot that never hears a hop count crosses the arena edge to edge, on lines a strip's
+    width apart (`_strip`: here the sensing span, 7 cells), until it comes in range of the
+    seeds and takes its bearings. Walking 20 cells at a time in random ways, such robots in
+    the corners of the 1,000-robot disc's arena searched for up to 1,300 steps."""
+    square = Shape(grid_from("### ### ###"))  # on cells (1, 1) to (3, 3), seeds beside it
+    world = build_world([GroupSpec("test", square, (200, 60, 60), 1)], arena=(40, 40))
+    swarm = Swarm(world, strategies.create("local-swap"), 1, start=np.array([(38, 38)]))
+    memory, lines = swarm.driver.memory, []
+    while not memory.localised[0] and swarm.step_count < 3000:
+        swarm.step()
+        way = int(memory.crossing[0])
+        if way and (not lines or lines[-1][0] != way):  # a new crossing: the line it runs on
+            lines.append((way, int(swarm.cell[0][1 if way in (1, 2) else 0])))
+    assert memory.localised[0]
+    assert len(lines) >= 3
+    assert {abs(a[1] - b[1]) for a, b in itertools.pairwise(lines[1:])} == {7}
 
 
 @settings(max_examples=50, deadline=None)

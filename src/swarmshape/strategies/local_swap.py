@@ -247,6 +247,7 @@ class LocalSwap(Program):
         memory.roam[led] = toward[led]
         memory.crossing[led | ~lost] = 0  # once it roams again, it sets out afresh
         roaming = lost & _unheard_too_long(sense, memory, hops)
+        memory.shift -= roaming & (memory.roam == memory.sweep) & arrived  # a cell of its shift
         moves[roaming] = _roam(sense, memory, occupied, roaming, rng)
         # under way: on toward the cell it plans toward while the cell after the next is
         # nearer it (a detour and a way round the shape turn at cells planned at rest), or
@@ -254,9 +255,8 @@ class LocalSwap(Program):
         onward = np.where((delta * STEPS[sense.heading]).sum(axis=1) >= 2, sense.heading, 0)
         onward[~going | memory.routed | (memory.detour > 0)] = 0
         onward[lost] = np.where(roaming, memory.roam, 0)[lost]
-        shifting = roaming & (memory.roam == memory.sweep)
-        memory.shift -= shifting & arrived
-        onward[shifting & (memory.shift <= 1)] = 0  # it brakes, to cross from there (`_roam`)
+        shifting = roaming & (memory.roam == memory.sweep) & (memory.shift <= 1)
+        onward[shifting] = 0  # it brakes on the shift's last cell, to cross from there (`_roam`)
         guide = memory.localised & _guides(sense)
         onward[guide] = 0  # it brakes to a stop on its next cell (`_guides`)
         moves = np.where(sense.ready, moves, _cruise(sense, onward))
@@ -1306,14 +1306,14 @@ def _choose_partner(
     the same step, under way too: over the five shapes of issue 30 at 1,000 robots, seeds 0 to
     4, 90 % of the cells were filled by 2.5 to 3.6 times the makespan bound, against 3.6 to 7.3.
 
-    A trade that shortens the summed distance is agreed with a neighbour on the move too (one
-    at rest holds still for it): two robots that met head-on in a corridor each stepped aside
-    for the other, in step, and never once both stood still to trade. A robot under way agrees
-    such a trade too, and goes on while it does (only these: the other kinds are for a robot
-    blocked where it rests). When robots chose only at rest, a robot that asked one under way
-    held still while it passed by: on the 1,018-robot S (seed 0) 17,076 of 84,507 asks went
-    unanswered so, robot-steps still that were a twentieth
-    of all the steps robots spent short of their goals; over the five shapes of issue 30 at
+    A trade that shortens the summed squared distance is agreed with a neighbour on the move
+    too (one at rest holds still for it): two robots that met head-on in a corridor each
+    stepped aside for the other, in step, and never once both stood still to trade. A robot
+    under way agrees such a trade too, and goes on while it does (only these: the other kinds
+    are for a robot blocked where it rests). When robots chose only at rest, a robot that asked
+    one under way held still while it passed by: on the 1,018-robot S (seed 0) 17,076 of 84,507
+    asks went unanswered so, robot-steps still that were a twentieth of all the steps robots
+    spent short of their goals; over the five shapes of issue 30 at
     1,000 robots, seeds 0 to 9, the median steps over the makespan bound fell from 8.1 to 7.3
     with this, and the median distance over the least from 1.64 to 1.52. A robot on its way to
     its goal trades with one resting on its own goal beside it and toward its goal even when it
@@ -1566,7 +1566,8 @@ def _crowded(sense: Perception, robots: np.ndarray) -> np.ndarray:
     step in each direction. A move that failed where none is met the arena's edge; one that
     failed beside a robot under way lost the cell to it. Counting only neighbours on the cell
     itself, a robot sweeping for the others took a robot moving in for the edge, and turned
-    back four cells from them."""
+    back four cells from them. (Beside another robot, a robot does not see the edge ahead: it
+    steps aside at random until the two part.)"""
     entries = np.flatnonzero(robots[sense.owner])
     crowded = np.zeros((len(sense), len(STEPS)), dtype=bool)
     for way in range(1, len(STEPS)):
@@ -1578,8 +1579,9 @@ def _crowded(sense: Perception, robots: np.ndarray) -> np.ndarray:
 @functools.lru_cache(maxsize=4)
 def _strip(blueprint: Blueprint, radius: float) -> np.ndarray:
     """Per group, the width in cells of the strips robots sweep the arena in (`_roam`): half
-    the shape's shorter side, so two strips cross a round shape and one its narrower parts, and
-    at least a sensing range's span, so a strip misses no robot at rest between two."""
+    the shape's shorter side, so two strips cross a round shape and one its narrower parts, but
+    no less than a sensing range's span (2r + 1 cells), over which one strip's robot senses
+    everything: narrower strips would sense the same cells twice."""
     sides = [np.ptp(cells, axis=0).min() + 1 if len(cells) else 1 for cells in blueprint.cells]
     return np.maximum(np.array(sides, dtype=np.int64) // 2, 2 * int(radius) + 1)
 
