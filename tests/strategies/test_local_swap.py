@@ -289,8 +289,10 @@ def test_robots_cut_off_from_the_rest_set_out_to_look_for_them():
 def test_a_robot_alone_without_bearings_sweeps_the_arena_in_strips_until_it_finds_them():
     """A robot that never hears a hop count crosses the arena edge to edge, on lines a strip's
     width apart (`_strip`: here the sensing span, 7 cells), until it comes in range of the
-    seeds and takes its bearings. Walking 20 cells at a time in random ways, such robots in
-    the corners of the 1,000-robot disc's arena searched for up to 1,300 steps."""
+    seeds, in a corner, and takes its bearings. Walking 20 cells at a time in random ways, such
+    robots in the corners of the 1,000-robot disc's arena searched for up to 1,300 steps; with
+    shifts a cell too long, and turning back from the edge a whole strip, this one swept the
+    same lines for good."""
     square = Shape(grid_from("### ### ###"))  # on cells (1, 1) to (3, 3), seeds beside it
     world = build_world([GroupSpec("test", square, (200, 60, 60), 1)], arena=(40, 40))
     swarm = Swarm(world, strategies.create("local-swap"), 1, start=np.array([(38, 38)]))
