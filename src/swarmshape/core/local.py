@@ -80,7 +80,7 @@ class Schema:
             raise TypeError(f"a message has exactly the fields {', '.join(self.widths)}")
         n = len(next(iter(fields.values())))
         columns = [np.asarray(fields[name]).reshape(n, w) for name, w in self.widths.items()]
-        return np.concatenate(columns, axis=1).astype(np.int64)
+        return np.concatenate(columns, axis=1).astype(np.int64, copy=False)
 
     def read(self, message: np.ndarray) -> SimpleNamespace:
         """The fields of messages ``(m, len(self))``, by name."""

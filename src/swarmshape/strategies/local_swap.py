@@ -286,7 +286,7 @@ class LocalSwap(Program):
                 np.minimum(sense.step - memory.spare_at, FAR),
                 ~sense.ready,
             ]
-        ).astype(np.int64)
+        ).astype(np.int64, copy=False)  # int64 already: no second 2 MB array at 10,000
         return moves, messages
 
     def finished(self, memory: Memory) -> np.ndarray:
@@ -1131,10 +1131,12 @@ def _leaving_ahead(sense: Perception) -> np.ndarray:
     and with noisy distances one in two looked past its cell's centre: the robot behind asked
     for its cell, refused, step after step, and never went round (a fuzz case of 88 cells
     stopped at 84 %)."""
-    cells = _cells(sense)
-    along = (sense.offset * cells).sum(axis=1)  # how far along the step to that cell
-    under_way = sense.heard & ~sense.seed & (sense.message[:, MOVING] == 1)
-    return under_way & (_apart(cells, STEPS[0]) == 1) & (along > 1.0)
+    rows = np.flatnonzero(sense.heard & ~sense.seed & (sense.message[:, MOVING] == 1))
+    cells = _cells(sense)[rows]
+    along = np.einsum("ij,ij->i", sense.offset[rows], cells)  # how far along to that cell
+    leaving = np.zeros(len(sense.owner), dtype=bool)
+    leaving[rows] = (_apart(cells, STEPS[0]) == 1) & (along > 1.0)
+    return leaving
 
 
 def _plan(
