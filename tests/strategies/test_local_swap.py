@@ -461,6 +461,11 @@ def test_letter_s_runs_that_once_stopped_short_form(cells, seed, faults, steps):
         # went on passing open cells toward the rim, emptying a cell each time
         # (`_relay_spares`).
         pytest.param(123, id="short-of-robots"),
+        # A robot cut off until the shape had formed came with the goal it started with, which
+        # a spare had claimed meanwhile, and traded it to a robot resting in the formed shape,
+        # which left its cell for one already filled (`_unsure`).
+        pytest.param(241, id="a-late-robots-goal-held-twice"),
+        pytest.param(870, id="a-late-robots-goal-held-twice-again"),
     ],
 )
 def test_fuzzed_cases_that_once_broke_an_invariant(number):
